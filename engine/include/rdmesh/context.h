@@ -1,0 +1,65 @@
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+
+#include "rdmesh/status.h"
+
+namespace rdmesh {
+
+struct FaceMesh;
+
+/// Progress of a run: what stage it is in and how many faces are done.
+struct Progress {
+  enum class Stage { kLoading, kEdges, kFaces, kAssembly, kDone };
+  Stage stage = Stage::kLoading;
+  int64_t done = 0;   ///< faces (or edges) finished
+  int64_t total = 0;  ///< faces (or edges) to do
+};
+
+/// Carries cancellation, a deadline and progress callbacks into a run. The engine polls it
+/// between faces and inside long loops; a stop request ends the run within well under a second.
+/// Thread-safe: Cancel() may be called from any thread while a run uses the context.
+class Context {
+ public:
+  using ProgressFn = std::function<void(const Progress&)>;
+  /// Called once per face as soon as it is meshed, from a worker thread; calls are serialised
+  /// (never two at once), in completion order (not face order).
+  using FaceDoneFn = std::function<void(const FaceMesh&)>;
+
+  Context() = default;
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  void Cancel() { cancelled_.store(true); }
+  bool cancelled() const { return cancelled_.load(); }
+
+  /// Stop the run when this point in time passes.
+  void SetDeadline(std::chrono::steady_clock::time_point deadline);
+  /// Convenience: deadline = now + seconds (ignored when seconds <= 0).
+  void SetTimeout(double seconds);
+
+  /// True when the run should stop (cancelled or past its deadline). Cheap; call often.
+  bool ShouldStop() const;
+  /// Ok, or kCancelled / kDeadlineExceeded.
+  Status StopStatus() const;
+
+  void set_progress_callback(ProgressFn fn) { progress_ = std::move(fn); }
+  void set_face_callback(FaceDoneFn fn) { face_done_ = std::move(fn); }
+
+  /// Engine side: report progress / a finished face (serialised internally).
+  void ReportProgress(const Progress& progress);
+  void ReportFace(const FaceMesh& face);
+
+ private:
+  std::atomic<bool> cancelled_{false};
+  std::atomic<int64_t> deadline_ns_{0};  // steady_clock ns since epoch; 0 = none
+  ProgressFn progress_;
+  FaceDoneFn face_done_;
+  std::mutex callback_mutex_;
+};
+
+}  // namespace rdmesh

@@ -1,0 +1,68 @@
+#pragma once
+
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rdmesh/context.h"
+#include "rdmesh/mesh.h"
+#include "rdmesh/options.h"
+#include "rdmesh/status.h"
+
+namespace rdmesh {
+
+class Model;  // opaque: the loaded B-rep (engine/src/model.h)
+
+/// What a model holds, for `rdmesh info` and the service's ModelInfo.
+struct ModelInfo {
+  std::string name;           ///< file name, or the name given at upload
+  std::string format;         ///< "step", "iges" or "brep"
+  std::string length_unit;    ///< the file's own length unit, e.g. "mm", "inch"
+  double unit_scale_mm = 1.0; ///< how many mm one file unit is (coordinates are always in mm)
+  int faces = 0;              ///< face ids 1..faces
+  int edges = 0;              ///< edge ids 1..edges
+  int vertices = 0;
+  int solids = 0;
+  int shells = 0;
+  int unique_faces = 0;       ///< faces after instancing (each meshed once)
+  int instances = 0;          ///< placed part instances
+  std::array<double, 6> bbox{};  ///< xmin ymin zmin xmax ymax zmax, model units
+  double diagonal = 0.0;         ///< bbox diagonal, model units
+  std::map<std::string, int> surface_types;  ///< SurfaceTypeName -> face count
+  std::vector<std::string> part_names;       ///< names of the parts (XCAF labels)
+  bool closed = false;        ///< every edge bounds exactly two faces (seams aside)
+};
+
+/// Model file formats.
+enum class ModelFormat { kAuto, kStep, kIges, kBrep };
+
+/// Loads a model from a file; the format follows the extension (.step/.stp, .iges/.igs, .brep).
+/// kNotFound, kParseError (with the file name and the reason) or kEmptyModel on failure.
+/// Thread-safe (OCCT's readers are serialised internally).
+Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context* context = nullptr);
+
+/// Loads a model from bytes in memory. `name` is used in messages and ModelInfo.
+Result<std::shared_ptr<const Model>> LoadModelFromBytes(const std::string& bytes,
+                                                        ModelFormat format,
+                                                        const std::string& name,
+                                                        Context* context = nullptr);
+
+/// Summary of a loaded model.
+ModelInfo GetModelInfo(const Model& model);
+
+/// Meshes a model. Faces that fail are reported in MeshResult::faces and the rest still mesh;
+/// the Status is not ok only for bad options, cancellation or a deadline.
+/// Thread-safe: one Model may be meshed by several calls at once.
+Result<MeshResult> MeshModel(const Model& model, const MeshOptions& options,
+                             Context* context = nullptr);
+
+/// Writes the assembled mesh; the extension picks the format: .msh (MSH 4.1 ASCII), .stl
+/// (binary), .obj, .ply, .vtu, .glb.
+Status WriteMesh(const Model& model, const MeshResult& result, const std::string& path);
+
+/// The file extensions WriteMesh understands, with the dot.
+std::vector<std::string> SupportedOutputFormats();
+
+}  // namespace rdmesh

@@ -1,0 +1,100 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace rdmesh {
+
+/// Kind of a face's underlying surface (as OCCT's GeomAbs_SurfaceType).
+enum class SurfaceType {
+  kPlane,
+  kCylinder,
+  kCone,
+  kSphere,
+  kTorus,
+  kBezier,
+  kBSpline,
+  kRevolution,
+  kExtrusion,
+  kOffset,
+  kOther,
+};
+/// Stable lower-case name, e.g. "bspline".
+const char* SurfaceTypeName(SurfaceType type);
+
+/// Outcome of meshing one face.
+enum class FaceStatus {
+  kOk,       ///< meshed within the requested criteria
+  kFailed,   ///< no triangles; `reason` says why
+  kSkipped,  ///< not requested (face subset) or the run stopped first
+};
+const char* FaceStatusName(FaceStatus status);
+
+/// The mesh of one B-rep face. Nodes are local to the face; boundary nodes also appear in the
+/// neighbouring faces' meshes with the same `global_ids` entry and bit-identical `xyz`.
+struct FaceMesh {
+  int face_id = 0;  ///< 1..F, TopExp::MapShapes order of the whole shape
+  SurfaceType surface_type = SurfaceType::kOther;
+  FaceStatus status = FaceStatus::kSkipped;
+  std::string reason;  ///< why the face failed or was skipped; empty when ok
+
+  std::vector<double> xyz;        ///< 3 per node: x y z, model units, world frame
+  std::vector<double> uv;         ///< 2 per node: u v, the face surface's own parameters
+  std::vector<double> normals;    ///< 3 per node: unit outward normal of the face at the node
+  std::vector<int32_t> triangles; ///< 3 per triangle: 0-based node ids, counter-clockwise seen
+                                  ///< from outside (right-handed with the outward normal)
+  std::vector<int64_t> global_ids;  ///< 1 per node: 0-based node id in the assembled Mesh
+
+  double max_deviation = 0.0;  ///< estimated largest mesh-surface distance, model units
+  double area = 0.0;           ///< area of the triangles, model units^2
+  double exact_area = 0.0;     ///< area of the B-rep face, model units^2
+  double seconds = 0.0;        ///< wall time spent on this face
+
+  int64_t triangle_count() const { return static_cast<int64_t>(triangles.size() / 3); }
+  int64_t node_count() const { return static_cast<int64_t>(xyz.size() / 3); }
+};
+
+/// The whole model as one watertight triangle mesh: boundary nodes are shared between faces.
+struct Mesh {
+  std::vector<double> xyz;         ///< 3 per node, model units, world frame
+  std::vector<int32_t> triangles;  ///< 3 per triangle, 0-based node ids, outward orientation
+  std::vector<int32_t> triangle_face;  ///< 1 per triangle: the B-rep face id (1..F)
+  /// Where each node lies on the B-rep: 0 = vertex, 1 = edge, 2 = face interior.
+  std::vector<int8_t> node_dim;
+  /// 1 per node: the id of that vertex (1..V), edge (1..E) or face (1..F).
+  std::vector<int32_t> node_entity;
+  /// 2 per node: the curve parameter t (edge nodes; second entry 0), or the surface (u, v) of a
+  /// face-interior node; 0 0 for vertices.
+  std::vector<double> node_param;
+
+  int64_t triangle_count() const { return static_cast<int64_t>(triangles.size() / 3); }
+  int64_t node_count() const { return static_cast<int64_t>(xyz.size() / 3); }
+};
+
+/// Totals and timings of a run.
+struct MeshSummary {
+  int64_t triangles = 0;
+  int64_t nodes = 0;
+  int faces_ok = 0;
+  int faces_failed = 0;
+  int faces_skipped = 0;
+  double requested_deviation = 0.0;  ///< the absolute max deviation asked for (0 = none)
+  double estimated_deviation = 0.0;  ///< the largest estimated deviation over all faces
+  double mesh_area = 0.0;
+  double exact_area = 0.0;
+  double edge_seconds = 0.0;  ///< edge grid
+  double face_seconds = 0.0;  ///< face interiors
+  double seconds = 0.0;       ///< edge grid + faces + assembly (not model loading)
+  int64_t edges = 0;          ///< B-rep edges discretised
+  int64_t edge_segments = 0;  ///< segments of all edge grids
+};
+
+/// Everything a run produces.
+struct MeshResult {
+  std::vector<FaceMesh> faces;  ///< one per face id, in face id order (index = face_id - 1)
+  Mesh mesh;                    ///< the assembled watertight mesh of the ok faces
+  MeshSummary summary;
+};
+
+}  // namespace rdmesh

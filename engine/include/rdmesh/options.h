@@ -1,0 +1,42 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "rdmesh/status.h"
+
+namespace rdmesh {
+
+/// What a meshing run should reach. A plain struct: every field has a usable default.
+/// Lengths are in model units (OCCT reads STEP in millimetres).
+struct MeshOptions {
+  /// Largest distance between mesh and surface, in model units. 0 = use max_deviation_rel.
+  double max_deviation = 0.0;
+  /// Largest distance as a fraction of the model's bounding-box diagonal. Used when
+  /// max_deviation is 0. 0 (with max_deviation 0) = no deviation criterion.
+  double max_deviation_rel = 1e-3;
+  /// Representation-deficit tolerance (scale free; RD of a segment turning by theta ~ theta^2/24).
+  /// 0 = off.
+  double rd_tolerance = 0.0;
+  /// Triangle budget for the whole model. 0 = none. When set, the run finds the smallest
+  /// deviation whose mesh has at most this many triangles.
+  int64_t max_triangles = 0;
+  /// Never split an edge or a triangle below this 3D edge length (model units). 0 = off.
+  double min_edge_length = 0.0;
+  /// Split every edge longer than this (model units); also puts nodes inside planar faces.
+  /// 0 = off.
+  double max_edge_length = 0.0;
+  /// Convert every face to a B-spline surface before meshing (default: exact surfaces).
+  bool nurbs = false;
+  /// Worker threads. 0 = all cores. The mesh does not depend on it.
+  int threads = 0;
+  /// Mesh only these face ids (1-based). Empty = all faces.
+  std::vector<int> face_ids;
+  /// Stop the run with kDeadlineExceeded after this many seconds. 0 = no limit.
+  double timeout_seconds = 0.0;
+};
+
+/// Checks ranges and combinations; kInvalidArgument with a readable message when out of range.
+Status ValidateOptions(const MeshOptions& options);
+
+}  // namespace rdmesh

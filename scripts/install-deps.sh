@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Installs everything rdmesh needs to build, test and benchmark, from Debian 12 packages only.
+# Used by the README's commands, by .ci/run and by docker/Dockerfile.
+#
+#   scripts/install-deps.sh            build + test + client dependencies (default)
+#   scripts/install-deps.sh --runtime  only what a built rdmeshd and the Python client need to run
+#   scripts/install-deps.sh --bench    also the benchmark peers (gmsh)
+set -euo pipefail
+
+mode=${1:-build}
+
+runtime_pkgs=(
+  libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev
+  libocct-foundation-dev libocct-ocaf-dev libocct-visualization-dev
+  libgrpc++-dev libprotobuf-dev libspdlog-dev libtbb-dev
+  python3-grpcio python3-protobuf python3-numpy python3-meshio python3-tqdm
+)
+build_pkgs=(
+  build-essential cmake ninja-build ccache pkg-config git
+  protobuf-compiler protobuf-compiler-grpc
+  libcgal-dev libgmp-dev libmpfr-dev
+  libcli11-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev python3-pytest
+  clang-format
+)
+bench_pkgs=(gmsh python3-gmsh)
+
+case "$mode" in
+  --runtime) pkgs=("${runtime_pkgs[@]}") ;;
+  --bench) pkgs=("${runtime_pkgs[@]}" "${build_pkgs[@]}" "${bench_pkgs[@]}") ;;
+  build|--build) pkgs=("${runtime_pkgs[@]}" "${build_pkgs[@]}") ;;
+  *) echo "usage: $0 [--build|--runtime|--bench]" >&2; exit 2 ;;
+esac
+
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#pkgs[@]} packages present"
+  exit 0
+fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
