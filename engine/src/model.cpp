@@ -1,0 +1,166 @@
+#include "model.h"
+
+#include <BRepGProp.hxx>
+#include <BRep_Tool.hxx>
+#include <GProp_GProps.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp.hxx>
+#include <TopTools_DataMapOfShapeInteger.hxx>
+#include <TopoDS.hxx>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "model_info.h"
+#include "model_readers.h"
+
+namespace rdmesh {
+
+namespace {
+
+const char* FormatName(ModelFormat format) {
+  switch (format) {
+    case ModelFormat::kStep:
+      return "step";
+    case ModelFormat::kIges:
+      return "iges";
+    case ModelFormat::kBrep:
+      return "brep";
+    case ModelFormat::kAuto:
+      break;
+  }
+  return "unknown";
+}
+
+// Face instancing: faces that share a TShape are meshed once, through the first of them.
+void FindInstances(Model* model) {
+  int count = model->face_count();
+  model->face_representative.assign(count, 0);
+  model->face_placement.assign(count, gp_Trsf());
+  model->face_flipped.assign(count, false);
+  TopTools_DataMapOfShapeInteger first_by_tshape;  // unlocated FORWARD face -> first face id
+  for (int id = 1; id <= count; ++id) {
+    const TopoDS_Face& face = model->face(id);
+    TopoDS_Shape key = face.Located(TopLoc_Location()).Oriented(TopAbs_FORWARD);
+    const int* found = first_by_tshape.Seek(key);
+    if (found == nullptr) {
+      first_by_tshape.Bind(key, id);
+      model->face_representative[id - 1] = id;
+      continue;
+    }
+    const TopoDS_Face& rep = model->face(*found);
+    model->face_representative[id - 1] = *found;
+    // World of rep = T_rep * local, world of face = T_face * local.
+    gp_Trsf placement = face.Location().Transformation();
+    placement.Multiply(rep.Location().Transformation().Inverted());
+    model->face_placement[id - 1] = placement;
+    model->face_flipped[id - 1] = face.Orientation() != rep.Orientation();
+  }
+}
+
+void ComputeFaceAreas(Model* model) {
+  int count = model->face_count();
+  model->face_area.assign(count, 0.0);
+  for (int id = 1; id <= count; ++id) {
+    int rep = model->face_representative[id - 1];
+    double scale = model->face_placement[id - 1].ScaleFactor();
+    if (rep != id && rep < id) {
+      model->face_area[id - 1] = model->face_area[rep - 1] * scale * scale;
+      continue;
+    }
+    try {
+      GProp_GProps props;
+      BRepGProp::SurfaceProperties(model->face(id), props);
+      model->face_area[id - 1] = std::abs(props.Mass());
+    } catch (const Standard_Failure&) {
+      model->face_area[id - 1] = 0.0;  // a broken face: meshing will report it
+    }
+  }
+}
+
+// `name` appears in messages, `display_name` in ModelInfo.
+Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
+                                                const std::string& name,
+                                                const std::string& display_name) {
+  auto model = std::make_shared<Model>();
+  model->shape = read.shape;
+  model->doc = read.doc;
+  try {
+    TopExp::MapShapes(model->shape, TopAbs_FACE, model->faces);
+    TopExp::MapShapes(model->shape, TopAbs_EDGE, model->edges);
+    TopExp::MapShapes(model->shape, TopAbs_VERTEX, model->vertices);
+    if (model->faces.IsEmpty())
+      return Status(StatusCode::kEmptyModel, "'" + name + "' holds no faces");
+    FindInstances(model.get());
+    ComputeFaceAreas(model.get());
+    for (int id = 1; id <= model->edge_count(); ++id)
+      model->max_edge_tolerance =
+          std::max(model->max_edge_tolerance, BRep_Tool::Tolerance(model->edge(id)));
+    model->info = ComputeModelInfo(*model);
+  } catch (const Standard_Failure& failure) {
+    return Status(StatusCode::kParseError, "cannot read '" + name + "': invalid topology (" +
+                                               failure.DynamicType()->Name() + ")");
+  }
+  model->info.name = display_name;
+  model->info.format = FormatName(format);
+  model->info.length_unit = read.length_unit;
+  model->info.unit_scale_mm = read.unit_scale_mm;
+  return std::shared_ptr<const Model>(std::move(model));
+}
+
+Result<std::shared_ptr<const Model>> Load(const std::string& bytes, ModelFormat format,
+                                          const std::string& path, const std::string& name,
+                                          const std::string& display_name, Context* context) {
+  if (context != nullptr) {
+    if (context->ShouldStop()) return context->StopStatus();
+    context->ReportProgress(Progress{Progress::Stage::kLoading, 0, 1});
+  }
+  if (format == ModelFormat::kAuto) format = FormatFromContent(bytes);
+  if (format == ModelFormat::kAuto) {
+    if (bytes.find_first_not_of(" \t\r\n") == std::string::npos)
+      return Status(StatusCode::kParseError, "cannot read '" + name + "': empty file");
+    return Status(StatusCode::kParseError,
+                  "cannot read '" + name + "': not a STEP, IGES or BREP file");
+  }
+  Result<ReadShape> read = ReadModelBytes(bytes, format, path, name, context);
+  if (!read.ok()) return read.status();
+  Result<std::shared_ptr<const Model>> model =
+      BuildModel(std::move(*read), format, name, display_name);
+  if (context != nullptr && model.ok())
+    context->ReportProgress(Progress{Progress::Stage::kLoading, 1, 1});
+  return model;
+}
+
+}  // namespace
+
+const TopoDS_Face& Model::face(int id) const { return TopoDS::Face(faces(id)); }
+
+const TopoDS_Edge& Model::edge(int id) const { return TopoDS::Edge(edges(id)); }
+
+Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context* context) {
+  std::error_code error;
+  std::filesystem::file_status status = std::filesystem::status(path, error);
+  if (!std::filesystem::exists(status))
+    return Status(StatusCode::kNotFound, "cannot read '" + path + "': no such file");
+  if (std::filesystem::is_directory(status))
+    return Status(StatusCode::kIoError, "cannot read '" + path + "': it is a directory");
+  std::ifstream file(path, std::ios::binary);
+  if (!file) return Status(StatusCode::kIoError, "cannot open '" + path + "' for reading");
+  std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (file.bad()) return Status(StatusCode::kIoError, "cannot read '" + path + "': read error");
+  std::string name = std::filesystem::path(path).filename().string();
+  return Load(bytes, FormatFromExtension(path), path, path, name, context);
+}
+
+Result<std::shared_ptr<const Model>> LoadModelFromBytes(const std::string& bytes,
+                                                        ModelFormat format, const std::string& name,
+                                                        Context* context) {
+  if (format == ModelFormat::kAuto) format = FormatFromExtension(name);
+  return Load(bytes, format, "", name, name, context);
+}
+
+ModelInfo GetModelInfo(const Model& model) { return model.info; }
+
+}  // namespace rdmesh

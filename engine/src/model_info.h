@@ -1,0 +1,13 @@
+#pragma once
+// The ModelInfo summary of a loaded model. Internal to the engine (model.cpp).
+
+#include "model.h"
+
+namespace rdmesh {
+
+/// Counts, bounding box, surface types, part names, instances and closedness of `model`, whose
+/// shape, id maps and face_representative are already filled. Leaves name, format and the
+/// length unit to the caller. May throw Standard_Failure on broken topology.
+ModelInfo ComputeModelInfo(const Model& model);
+
+}  // namespace rdmesh

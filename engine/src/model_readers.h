@@ -1,0 +1,42 @@
+#pragma once
+// Format detection and the OCCT readers behind LoadModel. Internal to the engine (model.cpp).
+
+#include <Standard_Handle.hxx>
+#include <TDocStd_Document.hxx>
+#include <TopoDS_Shape.hxx>
+#include <string>
+
+#include "rdmesh/context.h"
+#include "rdmesh/engine.h"
+#include "rdmesh/status.h"
+
+namespace rdmesh {
+
+/// The format named by a path's extension (.step/.stp, .iges/.igs, .brep/.brp, any case), or
+/// kAuto when the extension is none of these.
+ModelFormat FormatFromExtension(const std::string& path);
+
+/// The format recognised from a file's first bytes, or kAuto when none matches: STEP starts with
+/// "ISO-10303-21", BREP holds "CASCADE Topology" near its start, IGES has 80-column lines with
+/// 'S' in column 73.
+ModelFormat FormatFromContent(const std::string& bytes);
+
+/// What a reader produced: the shape, the XCAF document (null for BREP) and the file's length
+/// unit ("" when the format has none).
+struct ReadShape {
+  TopoDS_Shape shape;
+  Handle(TDocStd_Document) doc;
+  std::string length_unit;
+  double unit_scale_mm = 1.0;
+};
+
+/// Reads `bytes` (the whole file) as `format` (not kAuto). `path` is the file on disk when there
+/// is one (IGES is read from a file; a temporary one is written when `path` is empty). `name`
+/// is used in messages. Checks the header and trailer first, so truncated files fail cleanly.
+/// kParseError with "cannot read 'name': reason", or the context's stop status.
+/// Thread-safe: all OCCT reading is serialised by one process-wide mutex.
+Result<ReadShape> ReadModelBytes(const std::string& bytes, ModelFormat format,
+                                 const std::string& path, const std::string& name,
+                                 const Context* context);
+
+}  // namespace rdmesh

@@ -1,0 +1,318 @@
+// Model loading: ids, counts, instancing, ModelInfo and bad input.
+
+#include "model.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <BRepBndLib.hxx>
+#include <BRepGProp.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <GProp_GProps.hxx>
+#include <IGESControl_Writer.hxx>
+#include <STEPCAFControl_Writer.hxx>
+#include <TDataStd_Name.hxx>
+#include <TopExp.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "rdmesh/engine.h"
+
+namespace rdmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string DataPath(const std::string& name) { return std::string(RDMESH_TEST_DATA) + "/" + name; }
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::stringstream buffer;
+  buffer << file.rdbuf();
+  return buffer.str();
+}
+
+// A fresh scratch directory per test, removed at the end.
+class ModelTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("rdmesh_model_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string Write(const std::string& name, const std::string& bytes) {
+    std::string path = (dir_ / name).string();
+    std::ofstream(path, std::ios::binary) << bytes;
+    return path;
+  }
+
+  fs::path dir_;
+};
+
+TopoDS_Shape Box() { return BRepPrimAPI_MakeBox(10.0, 20.0, 30.0).Shape(); }
+
+// An XCAF assembly "pair" with two placed instances of one box part, written as STEP.
+std::string WriteInstancedStep(const std::string& path) {
+  Handle(TDocStd_Document) doc = new TDocStd_Document("MDTV-XCAF");
+  XCAFApp_Application::GetApplication()->InitDocument(doc);
+  Handle(XCAFDoc_ShapeTool) tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+  TDF_Label part = tool->AddShape(Box(), false);
+  TDataStd_Name::Set(part, "brick");
+  TDF_Label assembly = tool->NewShape();
+  TDataStd_Name::Set(assembly, "pair");
+  gp_Trsf shift;
+  shift.SetTranslation(gp_Vec(100.0, 0.0, 0.0));
+  tool->AddComponent(assembly, part, TopLoc_Location());
+  tool->AddComponent(assembly, part, TopLoc_Location(shift));
+  tool->UpdateAssemblies();
+  STEPCAFControl_Writer writer;
+  EXPECT_TRUE(writer.Transfer(doc, STEPControl_AsIs));
+  EXPECT_EQ(writer.Write(path.c_str()), IFSelect_RetDone);
+  return path;
+}
+
+TEST_F(ModelTest, LoadsStepPartWithIdsAndInfo) {
+  auto model = LoadModel(DataPath("nist_mbe_pmi_11.stp"));
+  ASSERT_TRUE(model.ok()) << model.status().ToString();
+  const Model& m = **model;
+  ModelInfo info = GetModelInfo(m);
+  EXPECT_EQ(info.name, "nist_mbe_pmi_11.stp");
+  EXPECT_EQ(info.format, "step");
+  EXPECT_EQ(info.length_unit, "mm");
+  EXPECT_FALSE(m.doc.IsNull());
+  EXPECT_EQ(info.faces, m.face_count());
+  EXPECT_EQ(info.edges, m.edge_count());
+  EXPECT_GT(info.faces, 0);
+  EXPECT_EQ(info.unique_faces, info.faces);
+  EXPECT_EQ(info.instances, 1);
+  EXPECT_EQ(info.solids, 1);
+  EXPECT_TRUE(info.closed);
+
+  // Ids are the TopExp::MapShapes order of the whole shape.
+  TopTools_IndexedMapOfShape faces;
+  TopExp::MapShapes(m.shape, TopAbs_FACE, faces);
+  ASSERT_EQ(faces.Extent(), m.face_count());
+  for (int id = 1; id <= m.face_count(); ++id) {
+    EXPECT_TRUE(m.face(id).IsSame(faces(id)));
+    EXPECT_EQ(m.face_representative[id - 1], id);
+    EXPECT_GT(m.face_area[id - 1], 0.0);
+  }
+
+  // The per-face areas add up to the area of the whole shape; the bbox matches OCCT's.
+  GProp_GProps props;
+  BRepGProp::SurfaceProperties(m.shape, props);
+  double sum = 0.0;
+  for (double area : m.face_area) sum += area;
+  EXPECT_NEAR(sum, props.Mass(), 1e-6 * props.Mass());
+  Bnd_Box box;
+  BRepBndLib::Add(m.shape, box);
+  EXPECT_GT(info.diagonal, 0.5 * std::sqrt(box.SquareExtent()));
+  EXPECT_LE(info.diagonal, std::sqrt(box.SquareExtent()) + 1e-9);
+
+  int typed = 0;
+  for (const auto& [type, count] : info.surface_types) typed += count;
+  EXPECT_EQ(typed, info.faces);
+  EXPECT_GT(m.max_edge_tolerance, 0.0);
+  EXPECT_LT(m.max_edge_tolerance, 0.01 * info.diagonal);
+}
+
+TEST_F(ModelTest, AssemblyPartNames) {
+  auto model = LoadModel(DataPath("cq_red_cube_blue_cylinder.step"));
+  ASSERT_TRUE(model.ok()) << model.status().ToString();
+  ModelInfo info = GetModelInfo(**model);
+  EXPECT_EQ(info.instances, 2);
+  EXPECT_EQ(info.part_names.size(), 2u);
+  EXPECT_EQ(info.solids, 2);
+  EXPECT_EQ(info.faces, 9);  // cube 6 + cylinder 3
+  EXPECT_EQ(info.surface_types["plane"], 8);
+  EXPECT_EQ(info.surface_types["cylinder"], 1);
+}
+
+TEST_F(ModelTest, EightSolids) {
+  auto model = LoadModel(DataPath("pyocc_eight_cyl.stp"));
+  ASSERT_TRUE(model.ok()) << model.status().ToString();
+  EXPECT_EQ(GetModelInfo(**model).solids, 8);
+}
+
+TEST_F(ModelTest, InstancedPartIsMeshedOnce) {
+  auto model = LoadModel(WriteInstancedStep((dir_ / "pair.step").string()));
+  ASSERT_TRUE(model.ok()) << model.status().ToString();
+  const Model& m = **model;
+  ModelInfo info = GetModelInfo(m);
+  ASSERT_EQ(info.faces, 12);
+  EXPECT_EQ(info.unique_faces, 6);
+  EXPECT_EQ(info.instances, 2);
+  EXPECT_EQ(info.solids, 2);
+  EXPECT_EQ(info.part_names, std::vector<std::string>{"brick"});
+  EXPECT_TRUE(info.closed);
+  EXPECT_NEAR(info.bbox[3] - info.bbox[0], 110.0, 1e-6);
+
+  int representatives = 0;
+  for (int id = 1; id <= m.face_count(); ++id) {
+    int rep = m.face_representative[id - 1];
+    ASSERT_GE(rep, 1);
+    ASSERT_LE(rep, id);
+    if (rep == id) {
+      ++representatives;
+      continue;
+    }
+    EXPECT_EQ(m.face_representative[rep - 1], rep);
+    EXPECT_FALSE(m.face_flipped[id - 1]);
+    EXPECT_NEAR(m.face_area[id - 1], m.face_area[rep - 1], 1e-9);
+    // The placement carries the representative's vertices onto this face's vertices.
+    TopTools_IndexedMapOfShape rep_vertices, vertices;
+    TopExp::MapShapes(m.face(rep), TopAbs_VERTEX, rep_vertices);
+    TopExp::MapShapes(m.face(id), TopAbs_VERTEX, vertices);
+    ASSERT_EQ(rep_vertices.Extent(), vertices.Extent());
+    for (int v = 1; v <= vertices.Extent(); ++v) {
+      gp_Pnt moved =
+          BRep_Tool::Pnt(TopoDS::Vertex(rep_vertices(v))).Transformed(m.face_placement[id - 1]);
+      EXPECT_LT(moved.Distance(BRep_Tool::Pnt(TopoDS::Vertex(vertices(v)))), 1e-9);
+    }
+    EXPECT_NEAR(m.face_placement[id - 1].TranslationPart().X(), 100.0, 1e-9);
+  }
+  EXPECT_EQ(representatives, 6);
+}
+
+TEST_F(ModelTest, BrepAndIgesFiles) {
+  std::string brep = (dir_ / "box.BREP").string();
+  ASSERT_TRUE(BRepTools::Write(Box(), brep.c_str()));
+  auto from_brep = LoadModel(brep);
+  ASSERT_TRUE(from_brep.ok()) << from_brep.status().ToString();
+  EXPECT_TRUE((*from_brep)->doc.IsNull());
+  ModelInfo brep_info = GetModelInfo(**from_brep);
+  EXPECT_EQ(brep_info.format, "brep");
+  EXPECT_EQ(brep_info.faces, 6);
+  EXPECT_EQ(brep_info.instances, 1);
+  EXPECT_TRUE(brep_info.closed);
+  EXPECT_NEAR(brep_info.diagonal, std::sqrt(100.0 + 400.0 + 900.0), 1e-6);
+
+  std::string iges = (dir_ / "box.igs").string();
+  IGESControl_Writer writer("MM", 1);  // BRep mode: faces stay faces
+  writer.AddShape(Box());
+  writer.ComputeModel();
+  ASSERT_TRUE(writer.Write(iges.c_str()));
+  auto from_iges = LoadModel(iges);
+  ASSERT_TRUE(from_iges.ok()) << from_iges.status().ToString();
+  EXPECT_EQ(GetModelInfo(**from_iges).format, "iges");
+  EXPECT_EQ(GetModelInfo(**from_iges).faces, 6);
+  EXPECT_EQ(GetModelInfo(**from_iges).length_unit, "mm");
+
+  // From memory, the format is found from the content.
+  for (const std::string& path : {brep, iges, DataPath("nist_mbe_pmi_11.stp")}) {
+    auto model = LoadModelFromBytes(ReadBytes(path), ModelFormat::kAuto, "upload");
+    ASSERT_TRUE(model.ok()) << path << ": " << model.status().ToString();
+    EXPECT_EQ(GetModelInfo(**model).name, "upload");
+    EXPECT_GT((*model)->face_count(), 0);
+  }
+}
+
+TEST_F(ModelTest, InchFileReportsItsUnit) {
+  std::string path = std::string(RDMESH_SHARED_DIR) + "/corpus/nist_mbe_pmi_3.stp";
+  ASSERT_TRUE(fs::exists(path)) << path;
+  auto model = LoadModel(path);
+  ASSERT_TRUE(model.ok()) << model.status().ToString();
+  EXPECT_EQ(GetModelInfo(**model).length_unit, "inch");
+  EXPECT_DOUBLE_EQ(GetModelInfo(**model).unit_scale_mm, 25.4);
+}
+
+void ExpectError(const Result<std::shared_ptr<const Model>>& result, StatusCode code,
+                 const std::string& name, const std::string& reason = "") {
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.status().code(), code) << result.status().ToString();
+  EXPECT_NE(result.status().message().find(name), std::string::npos) << result.status().message();
+  EXPECT_NE(result.status().message().find(reason), std::string::npos) << result.status().message();
+}
+
+TEST_F(ModelTest, BadInput) {
+  ExpectError(LoadModel((dir_ / "missing.step").string()), StatusCode::kNotFound, "missing.step",
+              "no such file");
+  ExpectError(LoadModel(Write("empty.step", "")), StatusCode::kParseError, "empty.step", "empty");
+  ExpectError(LoadModel(dir_.string()), StatusCode::kIoError, dir_.string(), "directory");
+
+  std::mt19937 random(42);
+  std::string noise(5000, '\0');
+  for (char& c : noise) c = static_cast<char>(random() & 0xff);
+  ExpectError(LoadModel(Write("noise.step", noise)), StatusCode::kParseError, "noise.step",
+              "not a STEP file");
+  ExpectError(LoadModel(Write("noise.igs", noise)), StatusCode::kParseError, "noise.igs");
+  ExpectError(LoadModel(Write("noise.brep", noise)), StatusCode::kParseError, "noise.brep");
+  ExpectError(LoadModel(Write("noise.bin", noise)), StatusCode::kParseError, "noise.bin",
+              "not a STEP, IGES or BREP file");
+  ExpectError(LoadModelFromBytes(noise, ModelFormat::kAuto, "blob"), StatusCode::kParseError,
+              "blob");
+
+  std::string step = ReadBytes(DataPath("nist_mbe_pmi_11.stp"));
+  ExpectError(LoadModel(Write("half.step", step.substr(0, step.size() / 2))),
+              StatusCode::kParseError, "half.step", "truncated");
+  ExpectError(LoadModel(Write("header_only.step", step.substr(0, 300) + "\nEND-ISO-10303-21;\n")),
+              StatusCode::kParseError, "header_only.step");
+
+  std::string brep_path = (dir_ / "box.brep").string();
+  ASSERT_TRUE(BRepTools::Write(Box(), brep_path.c_str()));
+  std::string brep = ReadBytes(brep_path);
+  ExpectError(LoadModel(Write("half.brep", brep.substr(0, brep.size() / 2))),
+              StatusCode::kParseError, "half.brep");
+
+  // A STEP file whose data section is garbage between a valid header and trailer.
+  std::string mangled =
+      step.substr(0, step.size() / 3) + noise.substr(0, 2000) + "\nENDSEC;\nEND-ISO-10303-21;\n";
+  auto result = LoadModel(Write("mangled.step", mangled));
+  if (!result.ok()) {
+    EXPECT_TRUE(result.status().code() == StatusCode::kParseError ||
+                result.status().code() == StatusCode::kEmptyModel)
+        << result.status().ToString();
+    EXPECT_NE(result.status().message().find("mangled.step"), std::string::npos);
+  }
+}
+
+TEST_F(ModelTest, EmptyModel) {
+  std::string path = (dir_ / "vertex.brep").string();
+  BRep_Builder builder;
+  TopoDS_Compound compound;
+  builder.MakeCompound(compound);
+  ASSERT_TRUE(BRepTools::Write(compound, path.c_str()));
+  ExpectError(LoadModel(path), StatusCode::kEmptyModel, "vertex.brep", "no faces");
+}
+
+TEST_F(ModelTest, CancelledContextStopsLoading) {
+  Context context;
+  context.Cancel();
+  auto model = LoadModel(DataPath("nist_mbe_pmi_11.stp"), &context);
+  ASSERT_FALSE(model.ok());
+  EXPECT_EQ(model.status().code(), StatusCode::kCancelled);
+}
+
+TEST_F(ModelTest, ConcurrentLoadsAgree) {
+  std::vector<int> faces(4, -1);
+  std::vector<std::thread> threads;
+  for (int i = 0; i < 4; ++i) {
+    threads.emplace_back([&faces, i] {
+      auto model = LoadModel(DataPath(i % 2 ? "pyocc_eight_cyl.stp" : "axom_sliced_cylinder.step"));
+      faces[i] = model.ok() ? (*model)->face_count() : 0;
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  EXPECT_GT(faces[0], 0);
+  EXPECT_GT(faces[1], 0);
+  EXPECT_EQ(faces[0], faces[2]);
+  EXPECT_EQ(faces[1], faces[3]);
+}
+
+}  // namespace
+}  // namespace rdmesh
