@@ -1,0 +1,14 @@
+#pragma once
+
+#include <string>
+#include <string_view>
+
+namespace rdmesh::server {
+
+/// SHA-256 of `bytes` as 64 lower-case hex digits (OpenSSL's EVP digest). Thread-safe.
+std::string Sha256Hex(std::string_view bytes);
+
+/// True for a string of exactly 64 lower-case hex digits.
+bool IsSha256Hex(std::string_view id);
+
+}  // namespace rdmesh::server
