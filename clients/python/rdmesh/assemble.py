@@ -1,0 +1,47 @@
+"""Welding per-face meshes into one watertight mesh through their global node ids."""
+
+import numpy as np
+
+
+def assemble(faces, node_count=None):
+    """Assembles faces into one mesh.
+
+    faces: FaceResult objects (or anything with face_id, status, xyz (n, 3), triangles (m, 3)
+        face-local node ids and global_ids (n,)), in any order; faces whose status is not "ok" or
+        that have no triangles are left out.
+    node_count: the run's node count (Summary.nodes); global ids are 0..node_count-1.
+
+    Returns (xyz, triangles, triangle_face):
+        xyz            (N, 3) float64, model units: one row per node used by the faces
+        triangles      (T, 3) int64, 0-based rows of xyz, face order, each face's own order
+        triangle_face  (T,)   int32, the B-rep face id of each triangle
+
+    A node shared by several faces (a boundary node) has one global id and appears once. When
+    every global id 0..node_count-1 is used, row i of xyz is global node i. Faces without global
+    ids (older servers) get their own nodes, so the result is then not welded.
+    """
+    faces = sorted((f for f in faces if f.status == "ok" and len(f.triangles)),
+                   key=lambda f: f.face_id)
+    ids = [np.asarray(f.global_ids, dtype=np.int64) for f in faces]
+    known = [i for i in ids if len(i)]
+    top = max([node_count or 0] + [int(i.max()) + 1 for i in known if len(i)])
+    # Faces without ids get fresh ids above every known one.
+    next_id = top
+    for k, f in enumerate(faces):
+        if len(ids[k]) != len(f.xyz):
+            ids[k] = np.arange(next_id, next_id + len(f.xyz), dtype=np.int64)
+            next_id += len(f.xyz)
+    total = next_id
+    xyz = np.zeros((total, 3), dtype=np.float64)
+    used = np.zeros(total, dtype=bool)
+    for k, f in enumerate(faces):
+        xyz[ids[k]] = f.xyz
+        used[ids[k]] = True
+    # Compact: drop ids that no assembled face uses (a face subset, failed faces).
+    remap = np.cumsum(used, dtype=np.int64) - 1
+    triangles = [remap[ids[k]][np.asarray(f.triangles, dtype=np.int64)]
+                 for k, f in enumerate(faces)]
+    triangle_face = [np.full(len(f.triangles), f.face_id, dtype=np.int32) for f in faces]
+    if not faces:
+        return (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int32))
+    return xyz[used], np.concatenate(triangles), np.concatenate(triangle_face)

@@ -1,0 +1,194 @@
+"""rdmesh-py: health, info, status and mesh through an rdmeshd server."""
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+from rdmesh.client import Client, RdmeshError
+
+OUTPUT_FORMATS = (".msh", ".stl", ".obj", ".vtu", ".ply")
+
+
+def write_mesh(path, result):
+    """Writes the assembled mesh: .msh as MSH 4.1 with one surface per B-rep face, the other
+    formats with meshio (STL binary; VTU and PLY carry the face id per triangle)."""
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in OUTPUT_FORMATS:
+        raise ValueError("unsupported output format %r (use %s)" % (ext, " ".join(OUTPUT_FORMATS)))
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    if ext == ".msh":
+        from rdmesh.msh import write_msh41
+        write_msh41(path, result.xyz, result.triangles, result.triangle_face)
+        return
+    import meshio
+    cell_data = {}
+    if ext in (".vtu", ".ply"):
+        cell_data = {"face_id": [result.triangle_face.astype(np.int32)]}
+    mesh = meshio.Mesh(result.xyz, [("triangle", result.triangles.astype(np.int32))],
+                       cell_data=cell_data)
+    kwargs = {"binary": True} if ext == ".stl" else {}
+    meshio.write(path, mesh, **kwargs)
+
+
+def _token(args):
+    if args.token_file:
+        with open(args.token_file) as file:
+            return file.read().strip()
+    return os.environ.get("RDMESH_TOKEN") or None
+
+
+def _client(args):
+    root = None
+    if args.tls_ca:
+        with open(args.tls_ca, "rb") as file:
+            root = file.read()
+    return Client(args.address, token=_token(args), root_certificates=root)
+
+
+def _model_ref(client, args):
+    if args.server_path:
+        from rdmesh.v1 import rdmesh_pb2 as pb
+        return pb.ModelRef(server_path=args.model)
+    return args.model
+
+
+def cmd_health(args):
+    with _client(args) as client:
+        try:
+            status = client.health(timeout=args.timeout or 5.0)
+        except RdmeshError as error:
+            print("UNREACHABLE %s" % error, file=sys.stderr)
+            return 2
+    print(status)
+    return 0 if status == "SERVING" else 1
+
+
+def cmd_status(args):
+    from google.protobuf import json_format
+    with _client(args) as client:
+        status = client.server_status(timeout=args.timeout or 5.0)
+    print(json_format.MessageToJson(status, preserving_proto_field_name=True))
+    return 0
+
+
+def cmd_info(args):
+    from google.protobuf import json_format
+    with _client(args) as client:
+        info = client.info(_model_ref(client, args), timeout=args.timeout)
+    print(json_format.MessageToJson(info, preserving_proto_field_name=True))
+    return 0
+
+
+def cmd_mesh(args):
+    options = dict(max_deviation=args.max_deviation, max_deviation_rel=args.max_deviation_rel,
+                   rd_tolerance=args.rd_tolerance, max_triangles=args.max_triangles,
+                   min_edge_length=args.min_edge_length, max_edge_length=args.max_edge_length,
+                   nurbs=args.nurbs or None, threads=args.threads,
+                   face_ids=[int(f) for f in args.faces.split(",")] if args.faces else None)
+    start = time.monotonic()
+    bar = None
+    progress = None
+    if not args.no_progress:
+        from tqdm import tqdm
+        bar = tqdm(total=0, unit="face", desc="meshing", leave=False, file=sys.stderr)
+
+        def progress(p):
+            if p.stage != "faces" or p.total <= 0:
+                return
+            bar.total = p.total
+            bar.n = p.done
+            bar.refresh()
+    try:
+        with _client(args) as client:
+            result = client.mesh(_model_ref(client, args), progress=progress,
+                                 timeout=args.timeout, **options)
+    finally:
+        if bar is not None:
+            bar.close()
+    write_mesh(args.output, result)
+    seconds = time.monotonic() - start
+    s = result.summary
+    summary = {
+        "model": result.model.name, "model_id": result.model.model_id,
+        "faces": result.model.faces, "faces_ok": s.faces_ok, "faces_failed": s.faces_failed,
+        "triangles": int(len(result.triangles)), "nodes": int(len(result.xyz)),
+        "requested_deviation": s.requested_deviation,
+        "estimated_deviation": s.estimated_deviation,
+        "mesh_area": s.mesh_area, "exact_area": s.exact_area,
+        "server_seconds": s.total_seconds, "seconds": seconds,
+        "output": os.path.abspath(args.output),
+    }
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print("%s: %d faces (%d ok, %d failed), %d triangles, %d nodes"
+              % (summary["model"], summary["faces"], s.faces_ok, s.faces_failed,
+                 summary["triangles"], summary["nodes"]))
+        print("deviation %.4g (asked %.4g), area %.6g of %.6g; %.2f s (server %.2f s) -> %s"
+              % (s.estimated_deviation, s.requested_deviation, s.mesh_area, s.exact_area,
+                 seconds, s.total_seconds, summary["output"]))
+    for face in result.faces:
+        if face.status == "failed":
+            print("face %d failed: %s" % (face.face_id, face.reason), file=sys.stderr)
+    return 0
+
+
+def parser():
+    p = argparse.ArgumentParser(prog="rdmesh-py", description=__doc__)
+    p.add_argument("--address", default=os.environ.get("RDMESH_ADDRESS", "127.0.0.1:50051"),
+                   help="rdmeshd host:port (env RDMESH_ADDRESS; default %(default)s)")
+    p.add_argument("--token-file", default=os.environ.get("RDMESH_TOKEN_FILE"),
+                   help="file holding the server's bearer token (env RDMESH_TOKEN_FILE, or "
+                        "the token itself in RDMESH_TOKEN)")
+    p.add_argument("--tls-ca", default=os.environ.get("RDMESH_TLS_CA"),
+                   help="PEM of the CA that signed the server's certificate: use TLS")
+    p.add_argument("--timeout", type=float, default=None, help="call deadline, seconds")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    sub.add_parser("health", help="print the server's health status (exit 0 when SERVING)")
+    sub.add_parser("status", help="print the server's status (jobs, cache, limits) as JSON")
+    info = sub.add_parser("info", help="describe a model (JSON)")
+    info.add_argument("model", help="a model file (uploaded), or a model id")
+    info.add_argument("--server-path", action="store_true",
+                      help="MODEL is a path under the server's --data-root")
+
+    mesh = sub.add_parser("mesh", help="mesh a model and write the mesh")
+    mesh.add_argument("model", help="a model file (uploaded), or a model id")
+    mesh.add_argument("-o", "--output", required=True,
+                      help="output file: " + ", ".join(OUTPUT_FORMATS))
+    mesh.add_argument("--server-path", action="store_true",
+                      help="MODEL is a path under the server's --data-root")
+    mesh.add_argument("--max-deviation", type=float, help="absolute max deviation, model units")
+    mesh.add_argument("--max-deviation-rel", type=float,
+                      help="max deviation as a fraction of the bbox diagonal (default 1e-3)")
+    mesh.add_argument("--rd-tolerance", type=float, help="representation-deficit tolerance")
+    mesh.add_argument("--max-triangles", type=int, help="triangle budget for the whole model")
+    mesh.add_argument("--min-edge-length", type=float, help="model units")
+    mesh.add_argument("--max-edge-length", type=float, help="model units")
+    mesh.add_argument("--nurbs", action="store_true", help="convert faces to B-splines first")
+    mesh.add_argument("--threads", type=int, help="worker threads (capped by the server)")
+    mesh.add_argument("--faces", help="comma-separated face ids to mesh (default all)")
+    mesh.add_argument("--no-progress", action="store_true", help="no progress bar")
+    mesh.add_argument("--json", action="store_true", help="print the summary as one JSON line")
+    return p
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
+    commands = {"health": cmd_health, "status": cmd_status, "info": cmd_info, "mesh": cmd_mesh}
+    try:
+        return commands[args.command](args)
+    except RdmeshError as error:
+        print("rdmesh-py: %s" % error, file=sys.stderr)
+        return 1
+    except (OSError, ValueError) as error:
+        print("rdmesh-py: %s" % error, file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

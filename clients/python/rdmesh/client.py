@@ -1,0 +1,292 @@
+"""The rdmesh client: upload, describe and mesh models on an rdmeshd server."""
+
+import os
+import re
+from dataclasses import dataclass
+from typing import Callable, Dict, Iterator, List, Optional
+
+import grpc
+import numpy as np
+
+from rdmesh import _health
+from rdmesh.assemble import assemble
+from rdmesh.v1 import rdmesh_pb2 as pb
+from rdmesh.v1 import rdmesh_pb2_grpc as pb_grpc
+
+CHUNK_BYTES = 1 << 20
+_MODEL_ID = re.compile(r"^[0-9a-f]{64}$")
+_OPTION_NAMES = {"max_deviation", "max_deviation_rel", "rd_tolerance", "max_triangles",
+                 "min_edge_length", "max_edge_length", "nurbs", "threads", "face_ids",
+                 "timeout_seconds"}
+_STAGES = {pb.STAGE_LOADING: "loading", pb.STAGE_EDGES: "edges", pb.STAGE_FACES: "faces",
+           pb.STAGE_ASSEMBLY: "assembly", pb.STAGE_DONE: "done"}
+_FACE_STATUS = {pb.FACE_STATUS_OK: "ok", pb.FACE_STATUS_FAILED: "failed",
+                pb.FACE_STATUS_SKIPPED: "skipped"}
+
+
+class RdmeshError(Exception):
+    """A failed call: `code` is the grpc.StatusCode, `details` the server's message."""
+
+    def __init__(self, code, details):
+        super().__init__("%s: %s" % (code.name if code else "UNKNOWN", details))
+        self.code = code
+        self.details = details
+
+    @classmethod
+    def wrap(cls, error):
+        return cls(error.code(), error.details())
+
+
+@dataclass
+class Progress:
+    """Where a run is: stage ("edges", "faces", ...) and how many of `total` are done."""
+    stage: str
+    done: int
+    total: int
+
+
+@dataclass
+class FaceResult:
+    """The mesh of one B-rep face. Lengths in model units."""
+    face_id: int
+    surface_type: str
+    status: str  # "ok", "failed" or "skipped"
+    reason: str
+    xyz: np.ndarray  # (n, 3) float64
+    triangles: np.ndarray  # (m, 3) int32, face-local node ids, counter-clockwise from outside
+    global_ids: np.ndarray  # (n,) int64, node ids in the assembled mesh
+    uv: Optional[np.ndarray] = None  # (n, 2) float64, when asked for
+    normals: Optional[np.ndarray] = None  # (n, 3) float64, when asked for
+    max_deviation: float = 0.0
+    area: float = 0.0
+    exact_area: float = 0.0
+    seconds: float = 0.0
+    messages: int = 1  # FaceMesh events it came in
+
+
+@dataclass
+class MeshResult:
+    """A finished run: per-face meshes and the assembled watertight mesh."""
+    model: "pb.ModelInfo"
+    options: "pb.ResolvedOptions"
+    summary: "pb.Summary"
+    faces: List[FaceResult]  # face id order
+    xyz: np.ndarray  # (N, 3) float64, model units
+    triangles: np.ndarray  # (T, 3) int64 rows of xyz
+    triangle_face: np.ndarray  # (T,) int32 B-rep face id per triangle
+    job_id: str = ""
+    largest_message: int = 0  # bytes of the largest event received
+
+    @property
+    def triangle_count(self):
+        return len(self.triangles)
+
+
+class _FaceParts:
+    """Collects the FaceMesh events of one face."""
+
+    def __init__(self, first):
+        self.first = first
+        self.xyz, self.uv, self.normals, self.ids, self.triangles = [], [], [], [], []
+        self.count = 0
+
+    def add(self, part):
+        if part.chunk_index != self.count:
+            raise RdmeshError(grpc.StatusCode.INTERNAL, "face %d: part %d arrived out of order"
+                              % (part.face_id, part.chunk_index))
+        self.count += 1
+        self.xyz.append(np.array(part.xyz, dtype=np.float64))
+        self.uv.append(np.array(part.uv, dtype=np.float64))
+        self.normals.append(np.array(part.normals, dtype=np.float64))
+        self.ids.append(np.array(part.global_ids, dtype=np.int64))
+        self.triangles.append(np.array(part.triangles, dtype=np.int32))
+        return self.count == part.chunk_count
+
+    def result(self):
+        f = self.first
+        uv = np.concatenate(self.uv).reshape(-1, 2)
+        normals = np.concatenate(self.normals).reshape(-1, 3)
+        return FaceResult(
+            face_id=f.face_id, surface_type=f.surface_type,
+            status=_FACE_STATUS.get(f.status, "unspecified"), reason=f.reason,
+            xyz=np.concatenate(self.xyz).reshape(-1, 3),
+            triangles=np.concatenate(self.triangles).reshape(-1, 3),
+            global_ids=np.concatenate(self.ids), uv=uv if len(uv) else None,
+            normals=normals if len(normals) else None, max_deviation=f.max_deviation,
+            area=f.area, exact_area=f.exact_area, seconds=f.seconds, messages=self.count)
+
+
+class Client:
+    """A connection to rdmeshd.
+
+    address: "host:port". token: the server's bearer token (--token-file), if it has one.
+    root_certificates: PEM bytes of the CA that signed the server's --tls-cert; TLS is used when
+    given. request_id: sent as x-request-id so that the server's log lines carry it.
+    """
+
+    def __init__(self, address, token=None, root_certificates=None, request_id=None):
+        options = [("grpc.max_receive_message_length", 64 << 20),
+                   ("grpc.max_send_message_length", 64 << 20)]
+        if root_certificates:
+            credentials = grpc.ssl_channel_credentials(root_certificates=root_certificates)
+            self._channel = grpc.secure_channel(address, credentials, options=options)
+        else:
+            self._channel = grpc.insecure_channel(address, options=options)
+        self._stub = pb_grpc.RdmeshStub(self._channel)
+        self._metadata = []
+        if token:
+            self._metadata.append(("authorization", "Bearer " + token))
+        if request_id:
+            self._metadata.append(("x-request-id", request_id))
+        self._health = self._channel.unary_unary(
+            _health.CHECK_METHOD,
+            request_serializer=_health.HealthCheckRequest.SerializeToString,
+            response_deserializer=_health.HealthCheckResponse.FromString)
+
+    def close(self):
+        self._channel.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # -- calls -----------------------------------------------------------------------------
+
+    def health(self, service="", timeout=5.0):
+        """The server's serving status name: "SERVING", "NOT_SERVING", ..."""
+        try:
+            response = self._health(_health.HealthCheckRequest(service=service), timeout=timeout)
+        except grpc.RpcError as error:
+            raise RdmeshError.wrap(error) from None
+        return _health.status_name(response)
+
+    def server_status(self, timeout=5.0):
+        """The server's ServerStatus (jobs running and queued, cache, limits)."""
+        return self._call(self._stub.GetServerStatus, pb.GetServerStatusRequest(), timeout)
+
+    def upload(self, path_or_bytes, name=None, timeout=None, chunk_bytes=CHUNK_BYTES):
+        """Uploads a model file (a path, or the bytes themselves) in ~1 MiB chunks and returns
+        its ModelInfo; ModelInfo.model_id names it in later calls."""
+        if isinstance(path_or_bytes, (bytes, bytearray, memoryview)):
+            data = bytes(path_or_bytes)
+            name = name or "upload"
+        else:
+            with open(path_or_bytes, "rb") as file:
+                data = file.read()
+            name = name or os.path.basename(os.fspath(path_or_bytes))
+
+        def chunks():
+            yield pb.ModelChunk(data=data[:chunk_bytes], name=name, total_bytes=len(data))
+            for start in range(chunk_bytes, len(data), chunk_bytes):
+                yield pb.ModelChunk(data=data[start:start + chunk_bytes])
+
+        return self._call(self._stub.UploadModel, chunks(), timeout)
+
+    def info(self, model, timeout=None):
+        """ModelInfo of a model: a ModelInfo, a model id, a local file (uploaded first) or a
+        ModelRef."""
+        return self._call(self._stub.GetModelInfo, self._ref(model, timeout), timeout)
+
+    def mesh_stream(self, model, uv=False, normals=False, timeout=None, **options):
+        """The raw Mesh call: an iterator of MeshEvent messages that also has cancel()."""
+        request = pb.MeshRequest(model=self._ref(model, timeout),
+                                 options=mesh_options(**options),
+                                 return_fields=pb.ReturnFields(uv=uv, normals=normals))
+        return self._stub.Mesh(request, timeout=timeout, metadata=self._metadata)
+
+    def mesh(self, model, progress: Optional[Callable[[Progress], None]] = None, uv=False,
+             normals=False, timeout=None, **options) -> MeshResult:
+        """Meshes a model (see info() for what `model` may be) and returns per-face numpy arrays
+        plus the assembled watertight mesh. Options are those of MeshOptions:
+        max_deviation, max_deviation_rel, rd_tolerance, max_triangles, min_edge_length,
+        max_edge_length, nurbs, threads, face_ids, timeout_seconds. `progress` is called with a
+        Progress as the run advances. `timeout` is the call's deadline in seconds."""
+        call = self.mesh_stream(model, uv=uv, normals=normals, timeout=timeout, **options)
+        started = summary = None
+        parts: Dict[int, _FaceParts] = {}
+        faces: Dict[int, FaceResult] = {}
+        largest = 0
+        faces_done = 0
+        try:
+            for event in call:
+                largest = max(largest, event.ByteSize())
+                kind = event.WhichOneof("event")
+                if kind == "started":
+                    started = event.started
+                elif kind == "progress" and progress:
+                    p = event.progress
+                    stage = _STAGES.get(p.stage, "unspecified")
+                    if stage == "faces":
+                        faces_done = max(faces_done, p.done)
+                        progress(Progress(stage, faces_done, p.total))
+                    else:
+                        progress(Progress(stage, p.done, p.total))
+                elif kind == "face":
+                    part = event.face
+                    collector = parts.setdefault(part.face_id, _FaceParts(part))
+                    if collector.add(part):
+                        faces[part.face_id] = parts.pop(part.face_id).result()
+                        if progress and started is not None:
+                            faces_done = max(faces_done, len(faces))
+                            progress(Progress("faces", faces_done, started.faces_requested))
+                elif kind == "summary":
+                    summary = event.summary
+        except grpc.RpcError as error:
+            raise RdmeshError.wrap(error) from None
+        if started is None or summary is None or parts:
+            raise RdmeshError(grpc.StatusCode.INTERNAL, "the Mesh stream ended early")
+        ordered = [faces[k] for k in sorted(faces)]
+        xyz, triangles, triangle_face = assemble(ordered, summary.nodes)
+        return MeshResult(model=started.model, options=started.options, summary=summary,
+                          faces=ordered, xyz=xyz, triangles=triangles,
+                          triangle_face=triangle_face, job_id=started.job_id,
+                          largest_message=largest)
+
+    # -- helpers ---------------------------------------------------------------------------
+
+    def _call(self, method, request, timeout):
+        try:
+            return method(request, timeout=timeout, metadata=self._metadata)
+        except grpc.RpcError as error:
+            raise RdmeshError.wrap(error) from None
+
+    def _ref(self, model, timeout=None):
+        """A ModelRef for `model`, uploading local files first."""
+        if isinstance(model, pb.ModelRef):
+            return model
+        if isinstance(model, pb.ModelInfo):
+            return pb.ModelRef(model_id=model.model_id)
+        if isinstance(model, str) and _MODEL_ID.match(model) and not os.path.exists(model):
+            return pb.ModelRef(model_id=model)
+        if isinstance(model, (str, os.PathLike, bytes, bytearray)):
+            return pb.ModelRef(model_id=self.upload(model, timeout=timeout).model_id)
+        raise TypeError("model must be a path, bytes, a model id, a ModelInfo or a ModelRef")
+
+
+def mesh_options(**options) -> "pb.MeshOptions":
+    """A MeshOptions message from keyword arguments (None values are left unset)."""
+    unknown = set(options) - _OPTION_NAMES
+    if unknown:
+        raise TypeError("unknown mesh option(s): %s (known: %s)"
+                        % (", ".join(sorted(unknown)), ", ".join(sorted(_OPTION_NAMES))))
+    message = pb.MeshOptions()
+    for key, value in options.items():
+        if value is None:
+            continue
+        if key == "face_ids":
+            message.face_ids.extend(int(v) for v in value)
+        else:
+            setattr(message, key, value)
+    return message
+
+
+def iter_faces(events: Iterator) -> Iterator[FaceResult]:
+    """Yields each face of a raw Mesh event stream as soon as its last part arrives."""
+    parts: Dict[int, _FaceParts] = {}
+    for event in events:
+        if event.WhichOneof("event") == "face":
+            collector = parts.setdefault(event.face.face_id, _FaceParts(event.face))
+            if collector.add(event.face):
+                yield parts.pop(event.face.face_id).result()
