@@ -1,0 +1,80 @@
+// WriteMesh: checks the mesh and picks the writer from the file extension.
+
+#include <Standard_Failure.hxx>
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <string>
+
+#include "model.h"
+#include "rdmesh/engine.h"
+#include "writers/gltf_writer.h"
+#include "writers/msh_writer.h"
+#include "writers/obj_writer.h"
+#include "writers/output_file.h"
+#include "writers/ply_writer.h"
+#include "writers/stl_writer.h"
+#include "writers/vtu_writer.h"
+
+namespace rdmesh {
+
+namespace {
+
+// The arrays agree in size and every index is in range.
+Status CheckMesh(const Model& model, const Mesh& mesh) {
+  if (mesh.xyz.size() % 3 != 0 || mesh.triangles.size() % 3 != 0 ||
+      mesh.triangle_face.size() != static_cast<size_t>(mesh.triangle_count()))
+    return Status(StatusCode::kInternal, "inconsistent mesh arrays");
+  int64_t nodes = mesh.node_count();
+  for (int32_t node : mesh.triangles)
+    if (node < 0 || node >= nodes)
+      return Status(StatusCode::kInternal, "a triangle refers to node " + std::to_string(node));
+  for (int32_t face : mesh.triangle_face)
+    if (face < 1 || face > model.face_count())
+      return Status(StatusCode::kInternal, "a triangle has face id " + std::to_string(face));
+  return Status::Ok();
+}
+
+std::string Extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+Status Dispatch(const Model& model, const MeshResult& result, const std::string& path) {
+  std::string ext = Extension(path);
+  if (ext == ".msh") return WriteMsh(model, result, path);
+  if (ext == ".stl") return WriteStl(result, path);
+  if (ext == ".obj") return WriteObj(model, result, path);
+  if (ext == ".ply") return WritePly(result, path);
+  if (ext == ".vtu") return WriteVtu(result, path);
+  if (ext == ".glb") return WriteGlb(model, result, path);
+  std::string supported;
+  for (const std::string& format : SupportedOutputFormats())
+    supported += (supported.empty() ? "" : ", ") + format;
+  return Status(StatusCode::kInvalidArgument, "cannot write '" + path + "': unknown format '" +
+                                                  ext + "' (supported: " + supported + ")");
+}
+
+}  // namespace
+
+std::vector<std::string> SupportedOutputFormats() {
+  return {".msh", ".stl", ".obj", ".ply", ".vtu", ".glb"};
+}
+
+Status WriteMesh(const Model& model, const MeshResult& result, const std::string& path) {
+  Status checked = CheckMesh(model, result.mesh);
+  if (!checked.ok()) return checked;
+  try {
+    return Dispatch(model, result, path);
+  } catch (const Standard_Failure& failure) {
+    return WriteError(path, failure.GetMessageString());
+  } catch (const std::bad_alloc&) {
+    return Status(StatusCode::kResourceExhausted, "out of memory writing '" + path + "'");
+  } catch (const std::exception& e) {
+    return WriteError(path, e.what());
+  }
+}
+
+}  // namespace rdmesh
