@@ -1,0 +1,298 @@
+#include "convert.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace rdmesh::server {
+namespace {
+
+TEST(ConvertOptionsTest, UnsetFieldsKeepTheEngineDefaults) {
+  Result<MeshOptions> options = FromProto(pb::MeshOptions());
+  ASSERT_TRUE(options.ok()) << options.status().ToString();
+  const MeshOptions defaults;
+  EXPECT_EQ(options->max_deviation, defaults.max_deviation);
+  EXPECT_EQ(options->max_deviation_rel, defaults.max_deviation_rel);
+  EXPECT_EQ(options->max_triangles, 0);
+  EXPECT_FALSE(options->nurbs);
+  EXPECT_TRUE(options->face_ids.empty());
+}
+
+TEST(ConvertOptionsTest, ExplicitZeroRelativeDeviationIsKept) {
+  pb::MeshOptions in;
+  in.set_max_deviation_rel(0.0);
+  in.set_rd_tolerance(1e-3);
+  Result<MeshOptions> options = FromProto(in);
+  ASSERT_TRUE(options.ok());
+  EXPECT_EQ(options->max_deviation_rel, 0.0);
+  EXPECT_EQ(options->rd_tolerance, 1e-3);
+}
+
+TEST(ConvertOptionsTest, RoundTrip) {
+  MeshOptions in;
+  in.max_deviation = 0.05;
+  in.max_deviation_rel = 2e-4;
+  in.rd_tolerance = 1e-3;
+  in.max_triangles = 12345;
+  in.min_edge_length = 0.01;
+  in.max_edge_length = 3.5;
+  in.nurbs = true;
+  in.threads = 3;
+  in.face_ids = {4, 1, 9};
+  in.timeout_seconds = 7.5;
+  Result<MeshOptions> out = FromProto(ToProto(in));
+  ASSERT_TRUE(out.ok()) << out.status().ToString();
+  EXPECT_EQ(out->max_deviation, in.max_deviation);
+  EXPECT_EQ(out->max_deviation_rel, in.max_deviation_rel);
+  EXPECT_EQ(out->rd_tolerance, in.rd_tolerance);
+  EXPECT_EQ(out->max_triangles, in.max_triangles);
+  EXPECT_EQ(out->min_edge_length, in.min_edge_length);
+  EXPECT_EQ(out->max_edge_length, in.max_edge_length);
+  EXPECT_EQ(out->nurbs, in.nurbs);
+  EXPECT_EQ(out->threads, in.threads);
+  EXPECT_EQ(out->face_ids, in.face_ids);
+  EXPECT_EQ(out->timeout_seconds, in.timeout_seconds);
+}
+
+TEST(ConvertOptionsTest, RejectsValuesNoRunAccepts) {
+  const auto rejects = [](auto set, const std::string& field) {
+    pb::MeshOptions in;
+    set(&in);
+    Result<MeshOptions> out = FromProto(in);
+    EXPECT_FALSE(out.ok()) << field;
+    EXPECT_EQ(out.status().code(), StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(out.status().message().find(field), std::string::npos) << out.status().message();
+  };
+  rejects([](pb::MeshOptions* o) { o->set_max_deviation(-1); }, "max_deviation");
+  rejects([](pb::MeshOptions* o) { o->set_max_deviation(std::nan("")); }, "max_deviation");
+  rejects([](pb::MeshOptions* o) { o->set_max_deviation_rel(-0.1); }, "max_deviation_rel");
+  rejects(
+      [](pb::MeshOptions* o) { o->set_max_edge_length(std::numeric_limits<double>::infinity()); },
+      "max_edge_length");
+  rejects([](pb::MeshOptions* o) { o->set_min_edge_length(-2); }, "min_edge_length");
+  rejects([](pb::MeshOptions* o) { o->set_rd_tolerance(-1e-3); }, "rd_tolerance");
+  rejects([](pb::MeshOptions* o) { o->set_max_triangles(-5); }, "max_triangles");
+  rejects([](pb::MeshOptions* o) { o->set_threads(-1); }, "threads");
+  rejects([](pb::MeshOptions* o) { o->add_face_ids(0); }, "face_ids");
+}
+
+TEST(ConvertModelInfoTest, RoundTrip) {
+  ModelInfo in;
+  in.name = "bracket.step";
+  in.format = "step";
+  in.length_unit = "inch";
+  in.unit_scale_mm = 25.4;
+  in.faces = 42;
+  in.edges = 100;
+  in.vertices = 60;
+  in.solids = 2;
+  in.shells = 2;
+  in.unique_faces = 21;
+  in.instances = 2;
+  in.bbox = {-1, -2, -3, 4, 5, 6};
+  in.diagonal = 12.4;
+  in.surface_types = {{"plane", 30}, {"cylinder", 12}};
+  in.part_names = {"base", "lid"};
+  in.closed = true;
+  const pb::ModelInfo message = ToProto(in);
+  EXPECT_EQ(message.bbox_size(), 6);
+  EXPECT_EQ(message.surface_types_size(), 2);
+  const ModelInfo out = FromProto(message);
+  EXPECT_EQ(out.name, in.name);
+  EXPECT_EQ(out.length_unit, in.length_unit);
+  EXPECT_EQ(out.unit_scale_mm, in.unit_scale_mm);
+  EXPECT_EQ(out.faces, in.faces);
+  EXPECT_EQ(out.edges, in.edges);
+  EXPECT_EQ(out.unique_faces, in.unique_faces);
+  EXPECT_EQ(out.bbox, in.bbox);
+  EXPECT_EQ(out.surface_types, in.surface_types);
+  EXPECT_EQ(out.part_names, in.part_names);
+  EXPECT_TRUE(out.closed);
+}
+
+TEST(ConvertEnumsTest, FormatsStatusesAndStages) {
+  EXPECT_EQ(FormatFromName("a/b/Part.STEP"), ModelFormat::kStep);
+  EXPECT_EQ(FormatFromName("part.stp"), ModelFormat::kStep);
+  EXPECT_EQ(FormatFromName("part.igs"), ModelFormat::kIges);
+  EXPECT_EQ(FormatFromName("part.iges"), ModelFormat::kIges);
+  EXPECT_EQ(FormatFromName("part.brep"), ModelFormat::kBrep);
+  EXPECT_EQ(FormatFromName("part.txt"), ModelFormat::kAuto);
+  EXPECT_EQ(FormatFromName("noextension"), ModelFormat::kAuto);
+  for (ModelFormat f : {ModelFormat::kStep, ModelFormat::kIges, ModelFormat::kBrep}) {
+    EXPECT_EQ(FromProto(ToProto(f)), f);
+  }
+  EXPECT_EQ(ToProto(ModelFormat::kAuto), pb::MODEL_FORMAT_UNSPECIFIED);
+  for (FaceStatus s : {FaceStatus::kOk, FaceStatus::kFailed, FaceStatus::kSkipped}) {
+    EXPECT_EQ(FromProto(ToProto(s)), s);
+  }
+  EXPECT_EQ(ToProto(Progress::Stage::kFaces), pb::STAGE_FACES);
+  EXPECT_EQ(ToProto(Progress::Stage::kDone), pb::STAGE_DONE);
+  for (int t = 0; t <= static_cast<int>(SurfaceType::kOther); ++t) {
+    const auto type = static_cast<SurfaceType>(t);
+    EXPECT_EQ(SurfaceTypeFromName(SurfaceTypeName(type)), type);
+  }
+}
+
+TEST(ConvertSummaryTest, RoundTrip) {
+  MeshSummary in;
+  in.triangles = 5'000'001;
+  in.nodes = 2'500'003;
+  in.faces_ok = 10;
+  in.faces_failed = 1;
+  in.faces_skipped = 2;
+  in.requested_deviation = 0.01;
+  in.estimated_deviation = 0.009;
+  in.mesh_area = 99.5;
+  in.exact_area = 100.0;
+  in.edge_seconds = 0.5;
+  in.face_seconds = 2.5;
+  in.seconds = 3.25;
+  in.edges = 30;
+  in.edge_segments = 900;
+  const MeshSummary out = FromProto(ToProto(in));
+  EXPECT_EQ(out.triangles, in.triangles);
+  EXPECT_EQ(out.nodes, in.nodes);
+  EXPECT_EQ(out.faces_failed, in.faces_failed);
+  EXPECT_EQ(out.faces_skipped, in.faces_skipped);
+  EXPECT_EQ(out.estimated_deviation, in.estimated_deviation);
+  EXPECT_EQ(out.seconds, in.seconds);
+  EXPECT_EQ(out.edge_segments, in.edge_segments);
+}
+
+/// A face of `nodes` nodes on a strip, with every per-node array filled.
+FaceMesh MakeFace(int id, int64_t nodes) {
+  FaceMesh face;
+  face.face_id = id;
+  face.surface_type = SurfaceType::kBSpline;
+  face.status = FaceStatus::kOk;
+  std::mt19937 random(id);
+  std::uniform_real_distribution<double> any(-1000.0, 1000.0);
+  for (int64_t i = 0; i < nodes; ++i) {
+    for (int k = 0; k < 3; ++k) face.xyz.push_back(any(random));
+    for (int k = 0; k < 2; ++k) face.uv.push_back(any(random));
+    for (int k = 0; k < 3; ++k) face.normals.push_back(any(random));
+    face.global_ids.push_back(1'000'000'000'000LL + i);
+  }
+  for (int64_t i = 0; i + 2 < nodes; ++i) {
+    face.triangles.insert(
+        face.triangles.end(),
+        {static_cast<int32_t>(i), static_cast<int32_t>(i + 1), static_cast<int32_t>(i + 2)});
+  }
+  face.max_deviation = 0.25;
+  face.area = 12.0;
+  face.exact_area = 12.5;
+  face.seconds = 0.75;
+  return face;
+}
+
+void ExpectSameFace(const FaceMesh& a, const FaceMesh& b) {
+  EXPECT_EQ(a.face_id, b.face_id);
+  EXPECT_EQ(a.surface_type, b.surface_type);
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.reason, b.reason);
+  EXPECT_EQ(a.xyz, b.xyz);
+  EXPECT_EQ(a.uv, b.uv);
+  EXPECT_EQ(a.normals, b.normals);
+  EXPECT_EQ(a.global_ids, b.global_ids);
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.max_deviation, b.max_deviation);
+  EXPECT_EQ(a.area, b.area);
+  EXPECT_EQ(a.exact_area, b.exact_area);
+}
+
+TEST(SplitFaceMeshTest, SmallFaceIsOneMessage) {
+  const FaceMesh face = MakeFace(3, 100);
+  const std::vector<pb::FaceMesh> parts = SplitFaceMesh(face, true, true);
+  ASSERT_EQ(parts.size(), 1u);
+  EXPECT_EQ(parts[0].chunk_count(), 1);
+  EXPECT_EQ(parts[0].node_count(), 100);
+  EXPECT_EQ(parts[0].triangle_count(), 98);
+  EXPECT_EQ(parts[0].surface_type(), "bspline");
+  FaceMeshJoiner joiner;
+  ASSERT_TRUE(joiner.Add(parts[0]).ok());
+  EXPECT_TRUE(joiner.complete());
+  std::vector<FaceMesh> faces = joiner.TakeFaces();
+  ASSERT_EQ(faces.size(), 1u);
+  ExpectSameFace(faces[0], face);
+}
+
+TEST(SplitFaceMeshTest, LargeFaceSplitsUnderOneMiBAndJoinsBack) {
+  const FaceMesh face = MakeFace(7, 120'000);  // ~10 MB of arrays
+  const std::vector<pb::FaceMesh> parts = SplitFaceMesh(face, true, true);
+  ASSERT_GT(parts.size(), 5u);
+  FaceMeshJoiner joiner;
+  for (const pb::FaceMesh& part : parts) {
+    pb::MeshEvent event;
+    *event.mutable_face() = part;
+    EXPECT_LE(event.ByteSizeLong(), kMaxFaceMessageBytes);
+    if (part.chunk_index() + 1 < part.chunk_count()) {
+      EXPECT_GT(event.ByteSizeLong(), kMaxFaceMessageBytes / 2);  // not wastefully small
+    }
+    EXPECT_EQ(part.chunk_count(), static_cast<int>(parts.size()));
+    ASSERT_TRUE(joiner.Add(part).ok());
+  }
+  EXPECT_TRUE(joiner.complete());
+  std::vector<FaceMesh> faces = joiner.TakeFaces();
+  ASSERT_EQ(faces.size(), 1u);
+  ExpectSameFace(faces[0], face);
+}
+
+TEST(SplitFaceMeshTest, OptionalArraysOnlyWhenAskedFor) {
+  const FaceMesh face = MakeFace(2, 5000);
+  const std::vector<pb::FaceMesh> lean = SplitFaceMesh(face, false, false, 16 * 1024);
+  ASSERT_GT(lean.size(), 1u);
+  FaceMeshJoiner joiner;
+  for (const pb::FaceMesh& part : lean) {
+    EXPECT_EQ(part.uv_size(), 0);
+    EXPECT_EQ(part.normals_size(), 0);
+    EXPECT_LE(part.ByteSizeLong(), 16u * 1024);
+    ASSERT_TRUE(joiner.Add(part).ok());
+  }
+  std::vector<FaceMesh> faces = joiner.TakeFaces();
+  ASSERT_EQ(faces.size(), 1u);
+  EXPECT_EQ(faces[0].xyz, face.xyz);
+  EXPECT_EQ(faces[0].triangles, face.triangles);
+  EXPECT_EQ(faces[0].global_ids, face.global_ids);
+  EXPECT_TRUE(faces[0].uv.empty());
+}
+
+TEST(SplitFaceMeshTest, FailedFaceWithoutNodesIsOneMessageWithItsReason) {
+  FaceMesh face;
+  face.face_id = 12;
+  face.status = FaceStatus::kFailed;
+  face.reason = "pcurve missing on edge 31";
+  const std::vector<pb::FaceMesh> parts = SplitFaceMesh(face, true, true);
+  ASSERT_EQ(parts.size(), 1u);
+  EXPECT_EQ(parts[0].status(), pb::FACE_STATUS_FAILED);
+  EXPECT_EQ(parts[0].reason(), face.reason);
+  EXPECT_EQ(parts[0].node_count(), 0);
+}
+
+TEST(FaceMeshJoinerTest, InterleavedFacesJoinAndOutOfOrderPartsFail) {
+  const FaceMesh a = MakeFace(1, 3000);
+  const FaceMesh b = MakeFace(2, 3000);
+  const auto parts_a = SplitFaceMesh(a, true, false, 32 * 1024);
+  const auto parts_b = SplitFaceMesh(b, true, false, 32 * 1024);
+  ASSERT_GT(parts_a.size(), 2u);
+  FaceMeshJoiner joiner;
+  for (std::size_t i = 0; i < std::max(parts_a.size(), parts_b.size()); ++i) {
+    if (i < parts_a.size()) ASSERT_TRUE(joiner.Add(parts_a[i]).ok());
+    if (i < parts_b.size()) ASSERT_TRUE(joiner.Add(parts_b[i]).ok());
+  }
+  EXPECT_TRUE(joiner.complete());
+  std::vector<FaceMesh> faces = joiner.TakeFaces();
+  ASSERT_EQ(faces.size(), 2u);
+  EXPECT_EQ(faces[0].xyz, a.xyz);
+  EXPECT_EQ(faces[1].triangles, b.triangles);
+
+  FaceMeshJoiner broken;
+  ASSERT_TRUE(broken.Add(parts_a[0]).ok());
+  const Status skipped = broken.Add(parts_a[2]);
+  EXPECT_EQ(skipped.code(), StatusCode::kInvalidArgument);
+  EXPECT_FALSE(broken.complete());
+}
+
+}  // namespace
+}  // namespace rdmesh::server
