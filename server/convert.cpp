@@ -260,13 +260,10 @@ std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool
   const int64_t triangles = face.triangle_count();
   with_uv = with_uv && face.uv.size() == static_cast<std::size_t>(2 * nodes);
   with_normals = with_normals && face.normals.size() == static_cast<std::size_t>(3 * nodes);
-  const bool with_ids = face.global_ids.size() == static_cast<std::size_t>(nodes);
 
-  // Upper bounds of the encoded size: doubles are 8 bytes, a non-negative int64 varint at most
-  // 10 and an int32 varint at most 5. The fixed fields, the reason and the MeshEvent wrapper
-  // fit in the reserve.
-  const std::size_t node_bytes =
-      24 + (with_uv ? 16 : 0) + (with_normals ? 24 : 0) + (with_ids ? 10 : 0);
+  // Upper bounds of the encoded size: doubles are 8 bytes and a non-negative int32 varint at
+  // most 5. The fixed fields, the reason and the MeshEvent wrapper fit in the reserve.
+  const std::size_t node_bytes = 24 + (with_uv ? 16 : 0) + (with_normals ? 24 : 0);
   const std::size_t triangle_bytes = 15;
   const std::size_t reserve = 512 + face.reason.size();
   const std::size_t budget =
@@ -301,7 +298,6 @@ std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool
     AppendRange(face.xyz, 3 * node, 3 * node_end, part.mutable_xyz());
     if (with_uv) AppendRange(face.uv, 2 * node, 2 * node_end, part.mutable_uv());
     if (with_normals) AppendRange(face.normals, 3 * node, 3 * node_end, part.mutable_normals());
-    if (with_ids) AppendRange(face.global_ids, node, node_end, part.mutable_global_ids());
     AppendRange(face.triangles, 3 * triangle, 3 * triangle_end, part.mutable_triangles());
     parts.push_back(std::move(part));
     node = node_end;
@@ -311,11 +307,70 @@ std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool
   return parts;
 }
 
-Status FaceMeshJoiner::Add(const pb::FaceMesh& part) {
+std::vector<pb::FaceNodeIds> SplitFaceNodeIds(const FaceMesh& face, const Mesh* topology,
+                                              std::size_t max_bytes) {
+  const int64_t nodes = face.node_count();
+  std::vector<pb::FaceNodeIds> parts;
+  if (nodes == 0 || face.global_ids.size() != static_cast<std::size_t>(nodes)) return parts;
+  const bool with_topology = topology != nullptr &&
+                             topology->node_dim.size() == topology->xyz.size() / 3 &&
+                             topology->node_entity.size() == topology->node_dim.size() &&
+                             topology->node_param.size() == 2 * topology->node_dim.size();
+  // Varint upper bounds: 10 bytes per int64 id, 5 per int32; params are 2 doubles.
+  const std::size_t node_bytes = 10 + (with_topology ? 5 + 5 + 16 : 0);
+  const std::size_t reserve = 256;
+  const std::size_t per_part =
+      std::max<std::size_t>(1, (max_bytes > reserve ? max_bytes - reserve : 0) / node_bytes);
+  for (int64_t node = 0; node < nodes; node += static_cast<int64_t>(per_part)) {
+    const int64_t end = std::min<int64_t>(nodes, node + static_cast<int64_t>(per_part));
+    pb::FaceNodeIds part;
+    part.set_face_id(face.face_id);
+    part.set_chunk_index(static_cast<int32_t>(parts.size()));
+    part.set_node_offset(node);
+    AppendRange(face.global_ids, node, end, part.mutable_global_ids());
+    if (with_topology) {
+      for (int64_t i = node; i < end; ++i) {
+        const int64_t id = face.global_ids[i];
+        part.add_node_dim(topology->node_dim[id]);
+        part.add_node_entity(topology->node_entity[id]);
+        part.add_node_param(topology->node_param[2 * id]);
+        part.add_node_param(topology->node_param[2 * id + 1]);
+      }
+    }
+    parts.push_back(std::move(part));
+  }
+  for (pb::FaceNodeIds& part : parts) part.set_chunk_count(static_cast<int32_t>(parts.size()));
+  return parts;
+}
+
+MeshResultBuilder::PendingFace& MeshResultBuilder::Slot(int face_id) {
+  if (faces_.size() < static_cast<std::size_t>(face_id)) faces_.resize(face_id);
+  return faces_[face_id - 1];
+}
+
+Status MeshResultBuilder::Add(const pb::MeshEvent& event) {
+  switch (event.event_case()) {
+    case pb::MeshEvent::kStarted:
+      started_ = event.started();
+      has_started_ = true;
+      return Status::Ok();
+    case pb::MeshEvent::kFace:
+      return AddFace(event.face());
+    case pb::MeshEvent::kNodeIds:
+      return AddNodeIds(event.node_ids());
+    case pb::MeshEvent::kSummary:
+      summary_ = event.summary();
+      has_summary_ = true;
+      return Status::Ok();
+    default:
+      return Status::Ok();  // progress, or an event type newer than this code
+  }
+}
+
+Status MeshResultBuilder::AddFace(const pb::FaceMesh& part) {
   const int id = part.face_id();
   if (id < 1) return Invalid("FaceMesh with face_id " + std::to_string(id));
-  if (pending_.size() < static_cast<std::size_t>(id)) pending_.resize(id);
-  Pending& entry = pending_[id - 1];
+  PendingFace& entry = Slot(id);
   const std::string where =
       "face " + std::to_string(id) + " part " + std::to_string(part.chunk_index()) + ": ";
   if (part.chunk_index() != entry.next_chunk) {
@@ -346,7 +401,6 @@ Status FaceMeshJoiner::Add(const pb::FaceMesh& part) {
   AppendField(part.xyz(), &face.xyz);
   AppendField(part.uv(), &face.uv);
   AppendField(part.normals(), &face.normals);
-  AppendField(part.global_ids(), &face.global_ids);
   AppendField(part.triangles(), &face.triangles);
   ++entry.next_chunk;
   if (entry.next_chunk == entry.chunk_count &&
@@ -356,22 +410,96 @@ Status FaceMeshJoiner::Add(const pb::FaceMesh& part) {
   return Status::Ok();
 }
 
-bool FaceMeshJoiner::complete() const {
-  for (const Pending& entry : pending_) {
-    if (entry.next_chunk != entry.chunk_count) return false;
+Status MeshResultBuilder::AddNodeIds(const pb::FaceNodeIds& part) {
+  const int id = part.face_id();
+  if (id < 1 || static_cast<std::size_t>(id) > faces_.size() || faces_[id - 1].chunk_count == 0 ||
+      faces_[id - 1].next_chunk != faces_[id - 1].chunk_count) {
+    return Invalid("FaceNodeIds for face " + std::to_string(id) + " before its FaceMesh");
   }
-  return true;
+  PendingFace& entry = faces_[id - 1];
+  if (part.chunk_index() != entry.next_ids_chunk ||
+      part.node_offset() != static_cast<int64_t>(entry.face.global_ids.size())) {
+    return Invalid("FaceNodeIds of face " + std::to_string(id) + " out of order");
+  }
+  if (part.chunk_index() == 0) entry.ids_chunk_count = part.chunk_count();
+  AppendField(part.global_ids(), &entry.face.global_ids);
+  AppendField(part.node_dim(), &entry.node_dim);
+  AppendField(part.node_entity(), &entry.node_entity);
+  AppendField(part.node_param(), &entry.node_param);
+  ++entry.next_ids_chunk;
+  if (entry.face.global_ids.size() > static_cast<std::size_t>(entry.face.node_count())) {
+    return Invalid("face " + std::to_string(id) + " has more global ids than nodes");
+  }
+  return Status::Ok();
 }
 
-std::vector<FaceMesh> FaceMeshJoiner::TakeFaces() {
-  std::vector<FaceMesh> faces;
-  for (Pending& entry : pending_) {
-    if (entry.chunk_count > 0 && entry.next_chunk == entry.chunk_count) {
-      faces.push_back(std::move(entry.face));
+Result<MeshResult> MeshResultBuilder::Finish() {
+  if (!has_started_ || !has_summary_) return Invalid("the Mesh stream ended early");
+  const int face_total = started_.model().faces();
+  if (faces_.size() > static_cast<std::size_t>(face_total)) {
+    return Invalid("a FaceMesh names a face id beyond the model's " + std::to_string(face_total));
+  }
+  faces_.resize(face_total);
+  MeshResult result;
+  result.summary = FromProto(summary_);
+  Mesh& mesh = result.mesh;
+  const int64_t nodes = result.summary.nodes;
+  mesh.xyz.assign(3 * nodes, 0.0);
+  bool topology = true;
+  for (const PendingFace& entry : faces_) {
+    if (entry.face.status == FaceStatus::kOk &&
+        entry.node_dim.size() != entry.face.global_ids.size()) {
+      topology = false;
     }
   }
-  pending_.clear();
-  return faces;
+  if (topology) {
+    mesh.node_dim.assign(nodes, 0);
+    mesh.node_entity.assign(nodes, 0);
+    mesh.node_param.assign(2 * nodes, 0.0);
+  }
+  for (int id = 1; id <= face_total; ++id) {
+    PendingFace& entry = faces_[id - 1];
+    FaceMesh& face = entry.face;
+    if (entry.chunk_count == 0) {  // never sent: not requested
+      face.face_id = id;
+      face.status = FaceStatus::kSkipped;
+      face.reason = "not requested";
+    } else if (entry.next_chunk != entry.chunk_count) {
+      return Invalid("face " + std::to_string(id) + " is missing parts");
+    }
+    if (face.status != FaceStatus::kOk) continue;
+    if (face.global_ids.size() != static_cast<std::size_t>(face.node_count())) {
+      return Invalid("face " + std::to_string(id) + " is missing its global node ids");
+    }
+    for (int64_t i = 0; i < face.node_count(); ++i) {
+      const int64_t g = face.global_ids[i];
+      if (g < 0 || g >= nodes) return Invalid("global node id out of range");
+      for (int k = 0; k < 3; ++k) mesh.xyz[3 * g + k] = face.xyz[3 * i + k];
+      if (topology) {
+        mesh.node_dim[g] = static_cast<int8_t>(entry.node_dim[i]);
+        mesh.node_entity[g] = entry.node_entity[i];
+        mesh.node_param[2 * g] = entry.node_param[2 * i];
+        mesh.node_param[2 * g + 1] = entry.node_param[2 * i + 1];
+      }
+    }
+    for (int32_t local : face.triangles) {
+      if (local < 0 || local >= face.node_count()) return Invalid("triangle node id out of range");
+    }
+    // As the engine assembles: face order, triangles that collapse at a pole left out.
+    for (std::size_t k = 0; k + 2 < face.triangles.size(); k += 3) {
+      const int64_t a = face.global_ids[face.triangles[k]];
+      const int64_t b = face.global_ids[face.triangles[k + 1]];
+      const int64_t c = face.global_ids[face.triangles[k + 2]];
+      if (a == b || b == c || c == a) continue;
+      mesh.triangles.insert(mesh.triangles.end(), {static_cast<int32_t>(a), static_cast<int32_t>(b),
+                                                   static_cast<int32_t>(c)});
+      mesh.triangle_face.push_back(id);
+    }
+  }
+  result.faces.reserve(face_total);
+  for (PendingFace& entry : faces_) result.faces.push_back(std::move(entry.face));
+  faces_.clear();
+  return result;
 }
 
 }  // namespace rdmesh::server

@@ -46,30 +46,55 @@ SurfaceType SurfaceTypeFromName(const std::string& name);
 pb::Summary ToProto(const MeshSummary& in);
 MeshSummary FromProto(const pb::Summary& in);
 
-/// Splits one face into FaceMesh events whose serialized size is at most `max_bytes` each
-/// (at least one event, even for a face without nodes). uv and normals are included when asked
-/// for and present.
+/// Splits one face into FaceMesh events whose serialized size (inside a MeshEvent) is at most
+/// `max_bytes` each; at least one event, even for a face without nodes. uv and normals are
+/// included when asked for and present. Global ids are not: see SplitFaceNodeIds.
 std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool with_normals,
                                         std::size_t max_bytes = kMaxFaceMessageBytes);
 
-/// Rebuilds faces from FaceMesh events (the inverse of SplitFaceMesh). Parts of one face must
-/// arrive in chunk order; parts of different faces may interleave.
-class FaceMeshJoiner {
+/// Splits a welded face's global ids into FaceNodeIds events of at most `max_bytes` each. With
+/// `topology` (the assembled mesh), each node's node_dim, node_entity and node_param are added.
+/// No events for a face without global ids.
+std::vector<pb::FaceNodeIds> SplitFaceNodeIds(const FaceMesh& face, const Mesh* topology,
+                                              std::size_t max_bytes = kMaxFaceMessageBytes);
+
+/// Rebuilds an engine MeshResult from the events of a Mesh stream: the inverse of the two
+/// functions above plus the summary. Parts of one face must arrive in chunk order; parts of
+/// different faces may interleave.
+class MeshResultBuilder {
  public:
-  /// Adds one part. kInvalidArgument when the part does not fit what came before.
-  Status Add(const pb::FaceMesh& part);
-  /// True when every started face has all its parts.
-  bool complete() const;
-  /// The finished faces, in face id order (faces never received are absent).
-  std::vector<FaceMesh> TakeFaces();
+  /// Adds one event. kInvalidArgument when it does not fit what came before.
+  Status Add(const pb::MeshEvent& event);
+  bool has_started() const { return has_started_; }
+  bool has_summary() const { return has_summary_; }
+  const pb::Started& started() const { return started_; }
+
+  /// The result: one FaceMesh per face id 1..faces in face id order (faces never sent are
+  /// kSkipped), the assembled mesh rebuilt through the global ids as the engine assembles it
+  /// (node classification only when the stream carried it) and the summary. kInvalidArgument
+  /// when the stream is incomplete (no Started or Summary, a face missing parts or ids).
+  Result<MeshResult> Finish();
 
  private:
-  struct Pending {
+  struct PendingFace {
     FaceMesh face;
     int next_chunk = 0;
     int chunk_count = 0;
+    int next_ids_chunk = 0;
+    int ids_chunk_count = 0;
+    std::vector<int32_t> node_dim;     // 1 per node, when sent
+    std::vector<int32_t> node_entity;  // 1 per node, when sent
+    std::vector<double> node_param;    // 2 per node, when sent
   };
-  std::vector<Pending> pending_;  // index = face_id - 1
+  Status AddFace(const pb::FaceMesh& part);
+  Status AddNodeIds(const pb::FaceNodeIds& part);
+  PendingFace& Slot(int face_id);
+
+  std::vector<PendingFace> faces_;  // index = face_id - 1
+  pb::Started started_;
+  pb::Summary summary_;
+  bool has_started_ = false;
+  bool has_summary_ = false;
 };
 
 }  // namespace rdmesh::server

@@ -225,11 +225,22 @@ int main(int argc, char** argv) {
       fmt::format("signal {}: NOT_SERVING, draining {} running and {} queued jobs for up to "
                   "{} s",
                   stop_signal, service.active_jobs(), service.queued_jobs(), flags.grace_seconds));
+  // Health turns NOT_SERVING and new jobs are refused (UNAVAILABLE) while the server still
+  // answers calls; running and queued jobs get the grace period to finish, then whatever is left
+  // is cancelled by Shutdown's deadline (which stops the engine within a second).
   health->SetServingStatus(false);
   service.BeginShutdown();
-  const auto grace = std::chrono::duration_cast<std::chrono::milliseconds>(
-      std::chrono::duration<double>(flags.grace_seconds));
-  server->Shutdown(std::chrono::system_clock::now() + grace);
+  const auto grace_end =
+      std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::milliseconds>(
+                                             std::chrono::duration<double>(flags.grace_seconds));
+  while (service.busy_jobs() > 0 && std::chrono::steady_clock::now() < grace_end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  if (service.busy_jobs() > 0) {
+    LogLine(spdlog::level::warn, "-",
+            fmt::format("grace period over: cancelling {} jobs", service.busy_jobs()));
+  }
+  server->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(200));
   server->Wait();
   LogLine(spdlog::level::info, "-", "stopped");
   return 0;

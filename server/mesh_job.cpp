@@ -105,7 +105,11 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
   std::optional<Progress::Stage> last_stage;
   Clock::time_point last_progress;
 
+  // A triangle budget makes the engine run several trial meshes through the same callbacks;
+  // only the final result counts then.
+  const bool stream_faces = params_.options.max_triangles == 0;
   context.set_face_callback([&](const FaceMesh& face) {
+    if (!stream_faces) return;
     {
       std::lock_guard<std::mutex> lock(state_mutex);
       if (face.face_id < 1 || face.face_id > face_total || !requested[face.face_id] || over_limit) {
@@ -187,8 +191,15 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
   }
   if (!result->ok()) return result->status();
   if (client_gone || write_failed) return Status(StatusCode::kCancelled, "client went away");
+  if (params_.max_triangles > 0 && result->value().summary.triangles > params_.max_triangles) {
+    return Status(StatusCode::kResourceExhausted,
+                  "the mesh has " + std::to_string(result->value().summary.triangles) +
+                      " triangles, more than the server's --max-triangles limit of " +
+                      std::to_string(params_.max_triangles));
+  }
 
-  // Faces the per-face callback did not report (e.g. failed before meshing) follow now.
+  // Faces the per-face callback did not report (budget runs, or faces the engine did not report)
+  // follow now, then every welded face's global ids.
   const MeshResult& mesh = result->value();
   for (const FaceMesh& face : mesh.faces) {
     if (face.face_id < 1 || face.face_id > face_total || !requested[face.face_id] ||
@@ -199,6 +210,18 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
       pb::MeshEvent out;
       *out.mutable_face() = std::move(part);
       ++face_messages_;
+      if (!write(out)) return Status(StatusCode::kCancelled, "client went away");
+    }
+  }
+  for (const FaceMesh& face : mesh.faces) {
+    if (face.status != FaceStatus::kOk || face.face_id < 1 || face.face_id > face_total ||
+        !requested[face.face_id]) {
+      continue;
+    }
+    for (pb::FaceNodeIds& part :
+         SplitFaceNodeIds(face, params_.with_topology ? &mesh.mesh : nullptr)) {
+      pb::MeshEvent out;
+      *out.mutable_node_ids() = std::move(part);
       if (!write(out)) return Status(StatusCode::kCancelled, "client went away");
     }
   }

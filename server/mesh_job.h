@@ -16,7 +16,10 @@ namespace rdmesh::server {
 
 /// One Mesh call. The engine runs on a thread of its own; its per-face and progress callbacks
 /// turn results into MeshEvent messages (faces split to at most ~1 MiB) and queue them; the
-/// calling thread drains the queue and is the only one that writes to the stream. Client
+/// calling thread drains the queue and is the only one that writes to the stream. After the run,
+/// the welded faces' global ids (FaceNodeIds) and the Summary follow. With a triangle budget the
+/// engine meshes the model several times, so faces are then sent after the run, from the final
+/// result. Client
 /// cancellation, the call's deadline and a failed write all cancel the engine's Context, which
 /// stops its workers within a second.
 class MeshJob {
@@ -26,6 +29,7 @@ class MeshJob {
     MeshOptions options;                       ///< validated, threads resolved
     bool with_uv = false;
     bool with_normals = false;
+    bool with_topology = false;  ///< FaceNodeIds carry node_dim, node_entity and node_param
     /// The server's --max-triangles: the run is stopped (RESOURCE_EXHAUSTED) when the faces
     /// streamed so far pass it. 0 = no limit.
     int64_t max_triangles = 0;
@@ -46,8 +50,8 @@ class MeshJob {
   /// `active_jobs` counts engine runs in progress (for GetServerStatus); not owned.
   MeshJob(Params params, const RequestLog* log, std::atomic<int>* active_jobs);
 
-  /// Runs the engine and streams Progress, FaceMesh and Summary events (the caller sends
-  /// Started). Returns when the engine thread has finished: ok after the Summary, or why not
+  /// Runs the engine and streams Progress, FaceMesh, FaceNodeIds and Summary events (the caller
+  /// sends Started). Returns when the engine thread has finished: ok after the Summary, or why not
   /// (kCancelled, kDeadlineExceeded, kResourceExhausted, or the engine's error).
   Status Run(const WriteFn& write, const CancelledFn& cancelled);
 

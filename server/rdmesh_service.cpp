@@ -310,6 +310,7 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
   params.options = std::move(*options);
   params.with_uv = request->return_fields().uv();
   params.with_normals = request->return_fields().normals();
+  params.with_topology = request->return_fields().node_topology();
   params.max_triangles = config_.max_triangles;
   params.deadline = context->deadline();
   params.start = start;

@@ -50,6 +50,8 @@ class RdmeshService final : public ::rdmesh::v1::Rdmesh::Service {
   /// Mesh calls whose engine run has not returned yet.
   int active_jobs() const { return active_jobs_.load(); }
   int queued_jobs() const { return limiter_.queued(); }
+  /// Mesh calls holding or waiting for a job slot (drained before shutdown).
+  int busy_jobs() const { return limiter_.running() + limiter_.queued(); }
 
  private:
   /// The request's log, with its id (the client's x-request-id, or a new one), which is also

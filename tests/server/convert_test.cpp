@@ -173,7 +173,7 @@ FaceMesh MakeFace(int id, int64_t nodes) {
     for (int k = 0; k < 3; ++k) face.xyz.push_back(any(random));
     for (int k = 0; k < 2; ++k) face.uv.push_back(any(random));
     for (int k = 0; k < 3; ++k) face.normals.push_back(any(random));
-    face.global_ids.push_back(1'000'000'000'000LL + i);
+    face.global_ids.push_back(i);
   }
   for (int64_t i = 0; i + 2 < nodes; ++i) {
     face.triangles.insert(
@@ -185,6 +185,37 @@ FaceMesh MakeFace(int id, int64_t nodes) {
   face.exact_area = 12.5;
   face.seconds = 0.75;
   return face;
+}
+
+/// A Started event for a model of `faces` faces.
+pb::MeshEvent StartedEvent(int faces) {
+  pb::MeshEvent event;
+  event.mutable_started()->mutable_model()->set_faces(faces);
+  return event;
+}
+
+pb::MeshEvent SummaryEvent(int64_t nodes, int64_t triangles) {
+  MeshSummary summary;
+  summary.nodes = nodes;
+  summary.triangles = triangles;
+  pb::MeshEvent event;
+  *event.mutable_summary() = ToProto(summary);
+  return event;
+}
+
+/// Sends `face` through SplitFaceMesh and SplitFaceNodeIds into `builder`.
+void Stream(const FaceMesh& face, const Mesh* topology, MeshResultBuilder* builder,
+            std::size_t max_bytes = kMaxFaceMessageBytes) {
+  for (pb::FaceMesh& part : SplitFaceMesh(face, true, true, max_bytes)) {
+    pb::MeshEvent event;
+    *event.mutable_face() = std::move(part);
+    ASSERT_TRUE(builder->Add(event).ok());
+  }
+  for (pb::FaceNodeIds& part : SplitFaceNodeIds(face, topology, max_bytes)) {
+    pb::MeshEvent event;
+    *event.mutable_node_ids() = std::move(part);
+    ASSERT_TRUE(builder->Add(event).ok());
+  }
 }
 
 void ExpectSameFace(const FaceMesh& a, const FaceMesh& b) {
@@ -210,19 +241,13 @@ TEST(SplitFaceMeshTest, SmallFaceIsOneMessage) {
   EXPECT_EQ(parts[0].node_count(), 100);
   EXPECT_EQ(parts[0].triangle_count(), 98);
   EXPECT_EQ(parts[0].surface_type(), "bspline");
-  FaceMeshJoiner joiner;
-  ASSERT_TRUE(joiner.Add(parts[0]).ok());
-  EXPECT_TRUE(joiner.complete());
-  std::vector<FaceMesh> faces = joiner.TakeFaces();
-  ASSERT_EQ(faces.size(), 1u);
-  ExpectSameFace(faces[0], face);
+  EXPECT_EQ(SplitFaceNodeIds(face, nullptr).size(), 1u);
 }
 
 TEST(SplitFaceMeshTest, LargeFaceSplitsUnderOneMiBAndJoinsBack) {
-  const FaceMesh face = MakeFace(7, 120'000);  // ~10 MB of arrays
+  const FaceMesh face = MakeFace(1, 120'000);  // ~10 MB of arrays
   const std::vector<pb::FaceMesh> parts = SplitFaceMesh(face, true, true);
   ASSERT_GT(parts.size(), 5u);
-  FaceMeshJoiner joiner;
   for (const pb::FaceMesh& part : parts) {
     pb::MeshEvent event;
     *event.mutable_face() = part;
@@ -231,31 +256,51 @@ TEST(SplitFaceMeshTest, LargeFaceSplitsUnderOneMiBAndJoinsBack) {
       EXPECT_GT(event.ByteSizeLong(), kMaxFaceMessageBytes / 2);  // not wastefully small
     }
     EXPECT_EQ(part.chunk_count(), static_cast<int>(parts.size()));
-    ASSERT_TRUE(joiner.Add(part).ok());
   }
-  EXPECT_TRUE(joiner.complete());
-  std::vector<FaceMesh> faces = joiner.TakeFaces();
-  ASSERT_EQ(faces.size(), 1u);
-  ExpectSameFace(faces[0], face);
+  // Every node is its own global node: a topology of 120k edge nodes.
+  Mesh topology;
+  topology.xyz = face.xyz;
+  topology.node_dim.assign(face.node_count(), 1);
+  topology.node_entity.assign(face.node_count(), 1'000'000);
+  for (int64_t i = 0; i < face.node_count(); ++i) {
+    topology.node_param.insert(topology.node_param.end(), {0.5 * i, 0.0});
+  }
+  const std::vector<pb::FaceNodeIds> ids = SplitFaceNodeIds(face, &topology);
+  ASSERT_GT(ids.size(), 1u);
+  for (const pb::FaceNodeIds& part : ids) {
+    pb::MeshEvent event;
+    *event.mutable_node_ids() = part;
+    EXPECT_LE(event.ByteSizeLong(), kMaxFaceMessageBytes);
+  }
+
+  MeshResultBuilder builder;
+  ASSERT_TRUE(builder.Add(StartedEvent(1)).ok());
+  Stream(face, &topology, &builder);
+  ASSERT_TRUE(builder.Add(SummaryEvent(face.node_count(), face.triangle_count())).ok());
+  Result<MeshResult> result = builder.Finish();
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  ASSERT_EQ(result->faces.size(), 1u);
+  ExpectSameFace(result->faces[0], face);
+  EXPECT_EQ(result->mesh.xyz, face.xyz);
+  EXPECT_EQ(result->mesh.triangles, face.triangles);
+  EXPECT_EQ(result->mesh.node_entity, topology.node_entity);
+  EXPECT_EQ(result->mesh.node_param, topology.node_param);
 }
 
 TEST(SplitFaceMeshTest, OptionalArraysOnlyWhenAskedFor) {
   const FaceMesh face = MakeFace(2, 5000);
   const std::vector<pb::FaceMesh> lean = SplitFaceMesh(face, false, false, 16 * 1024);
   ASSERT_GT(lean.size(), 1u);
-  FaceMeshJoiner joiner;
   for (const pb::FaceMesh& part : lean) {
     EXPECT_EQ(part.uv_size(), 0);
     EXPECT_EQ(part.normals_size(), 0);
     EXPECT_LE(part.ByteSizeLong(), 16u * 1024);
-    ASSERT_TRUE(joiner.Add(part).ok());
   }
-  std::vector<FaceMesh> faces = joiner.TakeFaces();
-  ASSERT_EQ(faces.size(), 1u);
-  EXPECT_EQ(faces[0].xyz, face.xyz);
-  EXPECT_EQ(faces[0].triangles, face.triangles);
-  EXPECT_EQ(faces[0].global_ids, face.global_ids);
-  EXPECT_TRUE(faces[0].uv.empty());
+  for (const pb::FaceNodeIds& part : SplitFaceNodeIds(face, nullptr, 16 * 1024)) {
+    EXPECT_EQ(part.node_dim_size(), 0);
+    EXPECT_EQ(part.node_param_size(), 0);
+    EXPECT_LE(part.ByteSizeLong(), 16u * 1024);
+  }
 }
 
 TEST(SplitFaceMeshTest, FailedFaceWithoutNodesIsOneMessageWithItsReason) {
@@ -268,30 +313,79 @@ TEST(SplitFaceMeshTest, FailedFaceWithoutNodesIsOneMessageWithItsReason) {
   EXPECT_EQ(parts[0].status(), pb::FACE_STATUS_FAILED);
   EXPECT_EQ(parts[0].reason(), face.reason);
   EXPECT_EQ(parts[0].node_count(), 0);
+  EXPECT_TRUE(SplitFaceNodeIds(face, nullptr).empty());
 }
 
-TEST(FaceMeshJoinerTest, InterleavedFacesJoinAndOutOfOrderPartsFail) {
-  const FaceMesh a = MakeFace(1, 3000);
-  const FaceMesh b = MakeFace(2, 3000);
-  const auto parts_a = SplitFaceMesh(a, true, false, 32 * 1024);
-  const auto parts_b = SplitFaceMesh(b, true, false, 32 * 1024);
-  ASSERT_GT(parts_a.size(), 2u);
-  FaceMeshJoiner joiner;
-  for (std::size_t i = 0; i < std::max(parts_a.size(), parts_b.size()); ++i) {
-    if (i < parts_a.size()) ASSERT_TRUE(joiner.Add(parts_a[i]).ok());
-    if (i < parts_b.size()) ASSERT_TRUE(joiner.Add(parts_b[i]).ok());
-  }
-  EXPECT_TRUE(joiner.complete());
-  std::vector<FaceMesh> faces = joiner.TakeFaces();
-  ASSERT_EQ(faces.size(), 2u);
-  EXPECT_EQ(faces[0].xyz, a.xyz);
-  EXPECT_EQ(faces[1].triangles, b.triangles);
+/// Two unit triangles welded along their shared edge, plus a collapsed triangle at a "pole".
+std::vector<FaceMesh> TwoWeldedFaces() {
+  FaceMesh a;
+  a.face_id = 1;
+  a.status = FaceStatus::kOk;
+  a.xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  a.triangles = {0, 1, 2};
+  a.global_ids = {0, 1, 2};
+  FaceMesh b;
+  b.face_id = 3;
+  b.status = FaceStatus::kOk;
+  b.xyz = {1, 0, 0, 1, 1, 0, 0, 1, 0, 1, 1, 0};  // node 3 is node 1 again (a pole)
+  b.triangles = {0, 1, 2, 1, 3, 2};              // the second collapses
+  b.global_ids = {1, 3, 2, 3};
+  return {a, b};
+}
 
-  FaceMeshJoiner broken;
-  ASSERT_TRUE(broken.Add(parts_a[0]).ok());
-  const Status skipped = broken.Add(parts_a[2]);
-  EXPECT_EQ(skipped.code(), StatusCode::kInvalidArgument);
-  EXPECT_FALSE(broken.complete());
+TEST(MeshResultBuilderTest, WeldsFacesThroughGlobalIdsAsTheEngineDoes) {
+  const std::vector<FaceMesh> faces = TwoWeldedFaces();
+  MeshResultBuilder builder;
+  ASSERT_TRUE(builder.Add(StartedEvent(4)).ok());
+  Stream(faces[1], nullptr, &builder);  // completion order, not face order
+  Stream(faces[0], nullptr, &builder);
+  ASSERT_TRUE(builder.Add(SummaryEvent(4, 2)).ok());
+  Result<MeshResult> result = builder.Finish();
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  ASSERT_EQ(result->faces.size(), 4u);
+  EXPECT_EQ(result->faces[1].status, FaceStatus::kSkipped);  // face 2 never sent
+  EXPECT_EQ(result->faces[3].status, FaceStatus::kSkipped);
+  EXPECT_EQ(result->mesh.xyz, (std::vector<double>{0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}));
+  EXPECT_EQ(result->mesh.triangles, (std::vector<int32_t>{0, 1, 2, 1, 3, 2}));
+  EXPECT_EQ(result->mesh.triangle_face, (std::vector<int32_t>{1, 3}));
+  EXPECT_TRUE(result->mesh.node_dim.empty());  // no topology was asked for
+  EXPECT_EQ(result->summary.nodes, 4);
+}
+
+TEST(MeshResultBuilderTest, RefusesIncompleteOrDisorderedStreams) {
+  const std::vector<FaceMesh> faces = TwoWeldedFaces();
+  {
+    MeshResultBuilder builder;  // no summary
+    ASSERT_TRUE(builder.Add(StartedEvent(3)).ok());
+    Stream(faces[0], nullptr, &builder);
+    EXPECT_EQ(builder.Finish().status().code(), StatusCode::kInvalidArgument);
+  }
+  {
+    MeshResultBuilder builder;  // ids before the face
+    pb::MeshEvent ids;
+    *ids.mutable_node_ids() = SplitFaceNodeIds(faces[0], nullptr)[0];
+    EXPECT_EQ(builder.Add(ids).code(), StatusCode::kInvalidArgument);
+  }
+  {
+    MeshResultBuilder builder;  // a face without its ids
+    ASSERT_TRUE(builder.Add(StartedEvent(3)).ok());
+    pb::MeshEvent face;
+    *face.mutable_face() = SplitFaceMesh(faces[0], false, false)[0];
+    ASSERT_TRUE(builder.Add(face).ok());
+    ASSERT_TRUE(builder.Add(SummaryEvent(3, 1)).ok());
+    EXPECT_EQ(builder.Finish().status().code(), StatusCode::kInvalidArgument);
+  }
+  {
+    MeshResultBuilder builder;  // a skipped part
+    const FaceMesh big = MakeFace(1, 3000);
+    const auto parts = SplitFaceMesh(big, true, false, 32 * 1024);
+    ASSERT_GT(parts.size(), 2u);
+    pb::MeshEvent event;
+    *event.mutable_face() = parts[0];
+    ASSERT_TRUE(builder.Add(event).ok());
+    *event.mutable_face() = parts[2];
+    EXPECT_EQ(builder.Add(event).code(), StatusCode::kInvalidArgument);
+  }
 }
 
 }  // namespace
