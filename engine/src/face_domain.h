@@ -1,0 +1,60 @@
+#pragma once
+// The domain of one face in its (u,v) parameter space: the boundary loops (outer loop, holes,
+// both sides of a seam, degenerate pole edges) built from the shared edge grids through the
+// face's pcurves, and a scale that makes the domain roughly isometric for 2D tests.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <TopoDS_Face.hxx>
+
+#include "geom.h"
+#include "rdmesh/status.h"
+#include "surface.h"
+
+namespace rdmesh {
+
+class Model;
+
+/// Where a mesh node sits on the B-rep.
+struct NodeRef {
+  int dim = 2;     ///< 0 vertex, 1 edge, 2 face interior
+  int entity = 0;  ///< vertex id, edge id or face id (1-based)
+  double t = 0;    ///< curve parameter on an edge
+};
+
+/// One B-rep edge's grid: curve parameters and world points, endpoints at the vertices.
+struct EdgeGrid {
+  std::vector<double> t;
+  std::vector<Vec3> xyz;
+  int first_vertex = 0;  ///< vertex id at t.front()
+  int last_vertex = 0;   ///< vertex id at t.back()
+  bool degenerate = false;
+};
+
+/// Boundary of a face in (u,v). Nodes are the boundary nodes; segments join them with the face
+/// on their left for a FORWARD face (orientation is not relied on by the triangulation).
+struct FaceDomain {
+  std::vector<Vec2> uv;      ///< per node: surface parameters
+  std::vector<Vec3> xyz;     ///< per node: world point (shared bit-identically with neighbours)
+  std::vector<NodeRef> ref;  ///< per node: B-rep classification
+  std::vector<std::array<int, 2>> segments;  ///< node index pairs
+  std::vector<bool> segment_splittable;      ///< degenerate (pole) segments may be split
+  double scale_u = 1, scale_v = 1;           ///< multiply u, v by these for isotropic 2D tests
+  double umin = 0, umax = 0, vmin = 0, vmax = 0;  ///< bounds of the boundary nodes
+};
+
+/// Builds the domain of face `face_id` (its FORWARD orientation) from the edge grids (indexed
+/// by edge id - 1). Fails with a reason for bad pcurves or loops that do not close.
+Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
+                       Surface& surface, FaceDomain* domain);
+
+/// Interior seed points for curved faces: a coarse (u,v) grid, spaced by how far the surface
+/// normal turns, so that no starting triangle spans more than ~45 degrees of the surface.
+std::vector<Vec2> SeedPoints(const FaceDomain& domain, Surface& surface);
+
+/// True when p lies inside the domain (even-odd rule over all boundary segments).
+bool InsideDomain(const FaceDomain& domain, Vec2 p);
+
+}  // namespace rdmesh

@@ -1,0 +1,194 @@
+#include "face_mesher.h"
+
+#include <BRepAdaptor_Surface.hxx>
+#include <Standard_Failure.hxx>
+#include <TopoDS.hxx>
+
+#include <chrono>
+#include <cmath>
+
+#include "cdt.h"
+#include "model.h"
+#include "operations.h"
+#include "refine.h"
+#include "surface.h"
+
+namespace rdmesh {
+
+namespace {
+
+SurfaceType TypeOf(const TopoDS_Face& face) {
+  switch (BRepAdaptor_Surface(face, Standard_False).GetType()) {
+    case GeomAbs_Plane: return SurfaceType::kPlane;
+    case GeomAbs_Cylinder: return SurfaceType::kCylinder;
+    case GeomAbs_Cone: return SurfaceType::kCone;
+    case GeomAbs_Sphere: return SurfaceType::kSphere;
+    case GeomAbs_Torus: return SurfaceType::kTorus;
+    case GeomAbs_BezierSurface: return SurfaceType::kBezier;
+    case GeomAbs_BSplineSurface: return SurfaceType::kBSpline;
+    case GeomAbs_SurfaceOfRevolution: return SurfaceType::kRevolution;
+    case GeomAbs_SurfaceOfExtrusion: return SurfaceType::kExtrusion;
+    case GeomAbs_OffsetSurface: return SurfaceType::kOffset;
+    default: return SurfaceType::kOther;
+  }
+}
+
+FaceMesh Failed(FaceMesh f, const std::string& reason) {
+  f.status = FaceStatus::kFailed;
+  f.reason = reason;
+  f.xyz.clear(), f.uv.clear(), f.normals.clear(), f.triangles.clear();
+  return f;
+}
+
+double TriangleArea(const FaceMesh& f, int t) {
+  const int32_t* x = &f.triangles[3 * t];
+  Vec3 p[3];
+  for (int i = 0; i < 3; ++i) p[i] = {f.xyz[3 * x[i]], f.xyz[3 * x[i] + 1], f.xyz[3 * x[i] + 2]};
+  return Area(p[0], p[1], p[2]);
+}
+
+// Compacts the live part of the working mesh into a FaceMesh, oriented outward. Triangles with
+// two corners at one point (at a pole) vanish.
+void Extract(const WorkMesh& m, bool reversed, FaceMesh* f, std::vector<NodeRef>* refs) {
+  std::vector<int> index(m.node_count(), -1);
+  for (int t = 0; t < static_cast<int>(m.tri.size()); ++t) {
+    if (!m.alive[t]) continue;
+    const Tri& x = m.tri[t];
+    const Vec3 &a = m.xyz[x[0]], &b = m.xyz[x[1]], &c = m.xyz[x[2]];
+    auto same = [](const Vec3& p, const Vec3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; };
+    if (same(a, b) || same(b, c) || same(c, a)) continue;
+    int32_t ids[3];
+    for (int i = 0; i < 3; ++i) {
+      int v = x[i];
+      if (index[v] < 0) {
+        index[v] = static_cast<int>(f->xyz.size() / 3);
+        f->xyz.insert(f->xyz.end(), {m.xyz[v].x, m.xyz[v].y, m.xyz[v].z});
+        f->uv.insert(f->uv.end(), {m.uv[v].x, m.uv[v].y});
+        Vec3 n = reversed ? -m.normal[v] : m.normal[v];
+        f->normals.insert(f->normals.end(), {n.x, n.y, n.z});
+        NodeRef r = m.ref[v];
+        if (r.dim == 2) r.entity = f->face_id;
+        refs->push_back(r);
+      }
+      ids[i] = index[v];
+    }
+    if (reversed) std::swap(ids[1], ids[2]);
+    f->triangles.insert(f->triangles.end(), {ids[0], ids[1], ids[2]});
+  }
+}
+
+}  // namespace
+
+FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
+                  const FaceJob& job, Context* context, std::vector<NodeRef>* refs) {
+  auto t0 = std::chrono::steady_clock::now();
+  FaceMesh f;
+  f.face_id = face_id;
+  f.exact_area = model.face_area[face_id - 1];
+  refs->clear();
+  try {
+    const TopoDS_Face& face = model.face(face_id);
+    f.surface_type = TypeOf(face);
+    std::unique_ptr<Surface> surface = MakeFaceSurface(face, job.nurbs);
+    FaceDomain domain;
+    Status st = BuildFaceDomain(model, face_id, grids, *surface, &domain);
+    if (!st.ok()) return Failed(f, st.message());
+    std::vector<Vec2> seeds = SeedPoints(domain, *surface);
+    // Constrained triangulation in scaled (u,v).
+    std::vector<Vec2> points;
+    for (const Vec2& p : domain.uv) points.push_back({p.x * domain.scale_u, p.y * domain.scale_v});
+    for (const Vec2& p : seeds) points.push_back({p.x * domain.scale_u, p.y * domain.scale_v});
+    CdtResult cdt;
+    st = ConstrainedTriangulation(points, domain.segments, &cdt);
+    if (!st.ok()) return Failed(f, st.message());
+    WorkMesh m;
+    for (size_t i = 0; i < domain.uv.size(); ++i) {
+      const Vec2& q = domain.uv[i];
+      m.AddNode(q, domain.xyz[i], surface->Normal(q.x, q.y), true, domain.ref[i]);
+    }
+    for (const Vec2& q : seeds)
+      m.AddNode(q, surface->Point(q.x, q.y), surface->Normal(q.x, q.y), false, NodeRef{});
+    std::vector<std::array<int, 2>> splittable;
+    for (size_t s = 0; s < domain.segments.size(); ++s)
+      if (domain.segment_splittable[s]) splittable.push_back(domain.segments[s]);
+    InitWorkMesh(cdt.triangles, cdt.constrained, splittable, &m);
+    RefineStats stats;
+    st = RefineFace(&m, *surface, job.criteria, domain.scale_u, domain.scale_v, job.max_triangles,
+                    job.improve, context, &stats);
+    if (!st.ok()) {
+      f.status = FaceStatus::kSkipped;
+      f.reason = st.message();
+      return f;
+    }
+    Extract(m, face.Orientation() == TopAbs_REVERSED, &f, refs);
+    if (f.triangles.empty()) return Failed(f, "no triangles survived");
+    f.max_deviation = stats.max_deviation;
+    f.status = FaceStatus::kOk;
+    if (stats.budget_hit) f.reason = "stopped at the per-face triangle cap";
+    else if (stats.max_violation > 1.0 + 1e-9)
+      f.reason = "some triangles could not be refined to the criteria without folding";
+  } catch (const Standard_Failure& e) {
+    return Failed(f, std::string("OCCT: ") + (e.GetMessageString() && *e.GetMessageString()
+                                                   ? e.GetMessageString()
+                                                   : e.DynamicType()->Name()));
+  } catch (const std::exception& e) {
+    return Failed(f, e.what());
+  }
+  for (int t = 0; t < f.triangle_count(); ++t) f.area += TriangleArea(f, t);
+  f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return f;
+}
+
+FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
+                   const std::vector<NodeRef>& rep_refs, const std::vector<EdgeGrid>& grids,
+                   std::vector<NodeRef>* refs) {
+  FaceMesh f = rep;
+  f.face_id = face_id;
+  f.exact_area = model.face_area[face_id - 1];
+  *refs = rep_refs;
+  if (rep.status != FaceStatus::kOk) return f;
+  const int rep_id = rep.face_id;
+  try {
+    // Boundary nodes: the copy's own domain lists them in the same order as the
+    // representative's (same TShape), with its own exact points and ids.
+    std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), false);
+    FaceDomain mine, theirs;
+    Status st = BuildFaceDomain(model, face_id, grids, *surface, &mine);
+    std::unique_ptr<Surface> rep_surface = MakeFaceSurface(model.face(rep_id), false);
+    if (st.ok()) st = BuildFaceDomain(model, rep_id, grids, *rep_surface, &theirs);
+    if (!st.ok() || mine.uv.size() != theirs.uv.size()) return Failed(f, "instance boundary differs");
+    const gp_Trsf& trsf = model.face_placement[face_id - 1];
+    for (int i = 0; i < f.node_count(); ++i) {
+      NodeRef& r = (*refs)[i];
+      if (r.dim == 2) {
+        gp_Pnt p(f.xyz[3 * i], f.xyz[3 * i + 1], f.xyz[3 * i + 2]);
+        p.Transform(trsf);
+        f.xyz[3 * i] = p.X(), f.xyz[3 * i + 1] = p.Y(), f.xyz[3 * i + 2] = p.Z();
+        r.entity = face_id;
+      } else {
+        // Find this node among the representative's boundary nodes by (u,v).
+        // Pole nodes added by refinement are not in the domain: match them by their vertex.
+        size_t k = 0;
+        for (; k < theirs.uv.size(); ++k)
+          if (theirs.uv[k].x == f.uv[2 * i] && theirs.uv[k].y == f.uv[2 * i + 1]) break;
+        if (k == theirs.uv.size() && r.dim == 0)
+          for (k = 0; k < theirs.ref.size(); ++k)
+            if (theirs.ref[k].dim == 0 && theirs.ref[k].entity == r.entity) break;
+        if (k == theirs.uv.size()) return Failed(f, "instance boundary node not found");
+        r = mine.ref[k];
+        f.xyz[3 * i] = mine.xyz[k].x, f.xyz[3 * i + 1] = mine.xyz[k].y, f.xyz[3 * i + 2] = mine.xyz[k].z;
+      }
+      gp_Vec n(f.normals[3 * i], f.normals[3 * i + 1], f.normals[3 * i + 2]);
+      n.Transform(trsf);
+      if (model.face_flipped[face_id - 1]) n.Reverse();
+      f.normals[3 * i] = n.X(), f.normals[3 * i + 1] = n.Y(), f.normals[3 * i + 2] = n.Z();
+    }
+    if (model.face_flipped[face_id - 1])
+      for (size_t t = 0; t + 2 < f.triangles.size(); t += 3) std::swap(f.triangles[t + 1], f.triangles[t + 2]);
+  } catch (const Standard_Failure& e) {
+    return Failed(f, std::string("OCCT: ") + e.DynamicType()->Name());
+  }
+  return f;
+}
+
+}  // namespace rdmesh

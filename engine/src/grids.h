@@ -1,0 +1,31 @@
+#pragma once
+// The edge grids of a whole model: every B-rep edge discretised once (edges that are the same
+// TShape under several locations share their parameters), in parallel.
+
+#include <vector>
+
+#include "face_domain.h"
+#include "rdmesh/context.h"
+#include "rdmesh/status.h"
+
+namespace rdmesh {
+
+class Model;
+
+struct GridCriteria {
+  double max_deviation = 0;  ///< model units; 0 = off
+  double rd_tolerance = 0;   ///< edge RD; 0 = off
+  double max_length = 0;
+  double min_length = 0;
+  /// Sagitta allowed on edges next to doubly curved faces, as a fraction of max_deviation: a
+  /// triangle with a side of length a on a sphere deviates a^2/6 k where the side's own sagitta
+  /// is a^2/8 k, so its boundary segments should be shorter than a pure curve criterion asks.
+  double curved_face_factor = 0.8;
+};
+
+/// Grids indexed by edge id - 1. `edge_needed[e-1]` false skips an edge (face subsets).
+Status BuildEdgeGrids(const Model& model, const GridCriteria& criteria, int threads,
+                      const std::vector<bool>& edge_needed, Context* context,
+                      std::vector<EdgeGrid>* grids);
+
+}  // namespace rdmesh

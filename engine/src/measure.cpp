@@ -1,0 +1,110 @@
+#include "measure.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rdmesh {
+
+namespace {
+
+// Largest |h| of the quadratic h(b) = A b1 b2 + B b2 b0 + C b0 b1 over the triangle, where
+// A, B, C come from the heights at the edge midpoints (h_mid = coefficient / 4). Exact for a
+// quadratic surface patch; returns the barycentric point of the peak in *peak.
+double QuadraticPeak(double h0, double h1, double h2, double peak[3]) {
+  double A = 4 * h0, B = 4 * h1, C = 4 * h2;
+  double best = std::max({std::fabs(h0), std::fabs(h1), std::fabs(h2)});
+  if (best == std::fabs(h0)) peak[0] = 0, peak[1] = 0.5, peak[2] = 0.5;
+  else if (best == std::fabs(h1)) peak[0] = 0.5, peak[1] = 0, peak[2] = 0.5;
+  else peak[0] = 0.5, peak[1] = 0.5, peak[2] = 0;
+  double det = 4 * B * C - (A - B - C) * (A - B - C);
+  if (std::fabs(det) > 1e-300) {
+    double b1 = B * (A - B + C) / det, b2 = C * (A + B - C) / det, b0 = 1 - b1 - b2;
+    if (b0 >= 0 && b1 >= 0 && b2 >= 0) {
+      double h = std::fabs(A * b1 * b2 + B * b2 * b0 + C * b0 * b1);
+      if (h > best) best = h, peak[0] = b0, peak[1] = b1, peak[2] = b2;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
+                                const FaceCriteria& c) {
+  TriangleMeasure m;
+  Vec3 mid[3];
+  Vec2 mid_uv[3];
+  for (int i = 0; i < 3; ++i) {
+    mid_uv[i] = 0.5 * (uv[(i + 1) % 3] + uv[(i + 2) % 3]);
+    mid[i] = s.Point(mid_uv[i].x, mid_uv[i].y);
+  }
+  Vec2 cen_uv = (1.0 / 3.0) * (uv[0] + uv[1] + uv[2]);
+  Vec3 cen = s.Point(cen_uv.x, cen_uv.y);
+  Vec3 n = Cross(p[1] - p[0], p[2] - p[0]);
+  double area2 = Norm(n);
+  double len2 = std::max({Dot(p[1] - p[0], p[1] - p[0]), Dot(p[2] - p[1], p[2] - p[1]),
+                          Dot(p[0] - p[2], p[0] - p[2])});
+  m.max_length = std::sqrt(len2);
+  double dev = 0;
+  m.worst_uv = cen_uv;
+  if (area2 > 1e-10 * len2) {
+    // Heights of the surface over the triangle's plane: at the centroid, and the peak of the
+    // quadratic through the edge midpoints (exact for a quadratic patch).
+    Vec3 nh = (1.0 / area2) * n;
+    double peak[3];
+    dev = QuadraticPeak(Dot(nh, mid[0] - p[0]), Dot(nh, mid[1] - p[0]), Dot(nh, mid[2] - p[0]),
+                        peak);
+    m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
+    double hc = std::fabs(Dot(nh, cen - p[0]));
+    if (hc > dev) dev = hc, m.worst_uv = cen_uv;
+    double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
+    m.rd = split / (0.5 * area2) - 1.0;
+  } else {
+    // Degenerate in 3D. At a pole (two corners at one point) it vanishes from the output and
+    // stands for nothing; otherwise it is a sliver: measure the surface against its segment.
+    double shortest = std::min({Dist(p[0], p[1]), Dist(p[1], p[2]), Dist(p[2], p[0])});
+    if (shortest > 1e-12 * m.max_length) {
+      dev = PointTriangleDistance(cen, p[0], p[1], p[2]);
+      for (int i = 0; i < 3; ++i) dev = std::max(dev, PointTriangleDistance(mid[i], p[0], p[1], p[2]));
+      m.rd = dev > 0 ? INFINITY : 0;
+    }
+  }
+  m.deviation = dev;
+  double v = 0;
+  if (c.max_deviation > 0) v = std::max(v, dev / c.max_deviation);
+  if (c.rd_tolerance > 0) v = std::max(v, m.rd / c.rd_tolerance);
+  if (c.max_length > 0) v = std::max(v, m.max_length / c.max_length);
+  if (c.min_length > 0 && m.max_length < 2 * c.min_length) v = std::min(v, 1.0);
+  m.violation = v;
+  return m;
+}
+
+double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3]) {
+  double o = Orient(uv[0], uv[1], uv[2]);
+  Vec2 e0 = uv[1] - uv[0], e1 = uv[2] - uv[1], e2 = uv[0] - uv[2];
+  double l2 = std::max({e0.x * e0.x + e0.y * e0.y, e1.x * e1.x + e1.y * e1.y,
+                        e2.x * e2.x + e2.y * e2.y});
+  if (!(o > 1e-12 * l2)) return kInvalid;
+  Vec3 n = Cross(p[1] - p[0], p[2] - p[0]);
+  double len2 = std::max({Dot(p[1] - p[0], p[1] - p[0]), Dot(p[2] - p[1], p[2] - p[1]),
+                          Dot(p[0] - p[2], p[0] - p[2])});
+  double area2 = Norm(n);
+  if (!(area2 > 1e-10 * len2)) {
+    // Degenerate in 3D: only a pole triangle (two corners at one point) is acceptable.
+    double shortest = std::min({Dist(p[0], p[1]), Dist(p[1], p[2]), Dist(p[2], p[0])});
+    return shortest <= 1e-12 * std::sqrt(len2) ? 1.0 : kInvalid;
+  }
+  Vec3 nh = (1.0 / area2) * n;
+  double worst = 1.0;
+  for (int i = 0; i < 3; ++i) worst = std::min(worst, Dot(nh, normals[i]));
+  return worst;
+}
+
+double SplitAreaRatio(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec2 q) {
+  Vec3 x = s.Point(q.x, q.y);
+  double a = Area(p[0], p[1], p[2]);
+  if (!(a > 0)) return 0;
+  return (Area(p[0], p[1], x) + Area(p[1], p[2], x) + Area(p[2], p[0], x)) / a;
+}
+
+}  // namespace rdmesh

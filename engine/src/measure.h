@@ -1,0 +1,44 @@
+#pragma once
+// How well one triangle stands for its surface patch, from surface evaluations only:
+// the estimated deviation (largest surface-triangle distance), the representation deficit a
+// split would remove, its longest edge, and whether it is valid (no fold).
+
+#include "geom.h"
+#include "surface.h"
+
+namespace rdmesh {
+
+/// The stop criteria of face refinement; a 0 turns a criterion off.
+struct FaceCriteria {
+  double max_deviation = 0;  ///< model units
+  double rd_tolerance = 0;   ///< triangle RD (A_S - A_T) / A_T
+  double max_length = 0;     ///< longest 3D edge, model units
+  double min_length = 0;     ///< never split a triangle whose longest edge is below 2x this
+  double min_normal_cos = 0.5;  ///< a triangle's normal must lie within acos(this) of its
+                                ///< corners' surface normals (fold guard)
+};
+
+struct TriangleMeasure {
+  double deviation = 0;   ///< model units
+  double rd = 0;          ///< area gain of a split at the centroid: RD estimate
+  double max_length = 0;  ///< longest 3D edge
+  double violation = 0;   ///< max over criteria of value / limit: <= 1 meets them all
+  Vec2 worst_uv;          ///< where the deviation peaks (a good split point)
+};
+
+/// Measures the triangle with corners uv[i] / xyz[i] (xyz are the nodes' mesh positions).
+TriangleMeasure MeasureTriangle(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
+                                const FaceCriteria& criteria);
+
+/// How well the triangle's 3D normal agrees with the surface normals at its corners (`normals`,
+/// oriented as Su x Sv): the smallest cosine between them. kInvalid when the (u,v) orientation
+/// is not positive or the triangle is degenerate in 3D other than at a pole (two corners at one
+/// point); 1 for a pole triangle. Operations keep it above 0 (no fold) and never push it below
+/// FaceCriteria::min_normal_cos where it was above.
+constexpr double kInvalid = -2.0;
+double TriangleAgreement(const Vec2 uv[3], const Vec3 xyz[3], const Vec3 normals[3]);
+
+/// Sum of the 3D areas of the three triangles a split at q makes, over the triangle's area.
+double SplitAreaRatio(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], Vec2 q);
+
+}  // namespace rdmesh

@@ -1,0 +1,290 @@
+#include "operations.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace rdmesh {
+
+int WorkMesh::AddNode(Vec2 p, Vec3 x, Vec3 n, bool is_fixed, NodeRef r, int axis) {
+  pole_axis.push_back(static_cast<int8_t>(axis));
+  uv.push_back(p);
+  xyz.push_back(x);
+  normal.push_back(n);
+  fixed.push_back(is_fixed ? 1 : 0);
+  ref.push_back(r);
+  node_tri.push_back(-1);
+  return node_count() - 1;
+}
+
+void WorkMesh::MeasureCorners(const std::array<int, 3>& t, Vec2 q[3], Vec3 x[3]) const {
+  for (int i = 0; i < 3; ++i) q[i] = uv[t[i]], x[i] = xyz[t[i]];
+  for (int i = 0; i < 3; ++i) {
+    int axis = pole_axis[t[i]];
+    if (axis < 0) continue;
+    const Vec2 &a = uv[t[(i + 1) % 3]], &b = uv[t[(i + 2) % 3]];
+    if (pole_axis[t[(i + 1) % 3]] >= 0 || pole_axis[t[(i + 2) % 3]] >= 0) continue;
+    if (axis == 0) q[i].x = 0.5 * (a.x + b.x);
+    else q[i].y = 0.5 * (a.y + b.y);
+  }
+}
+
+void WorkMesh::MeasureCorners(int t, Vec2 q[3], Vec3 x[3]) const { MeasureCorners(tri[t], q, x); }
+
+int WorkMesh::TriangleCount() const {
+  return static_cast<int>(std::count(alive.begin(), alive.end(), 1));
+}
+
+int WorkMesh::CornerOf(int t, int v) const {
+  for (int i = 0; i < 3; ++i)
+    if (tri[t][i] == v) return i;
+  return -1;
+}
+
+std::vector<int> WorkMesh::Ring(int v) const {
+  std::vector<int> ring;
+  int start = node_tri[v];
+  if (start < 0 || !alive[start]) return ring;
+  // Walk one way (across the edge after v), then, if the fan is open, the other way.
+  int t = start;
+  do {
+    ring.push_back(t);
+    int k = CornerOf(t, v);
+    t = nbr[t][(k + 1) % 3];
+  } while (t >= 0 && t != start && ring.size() < 4096);
+  if (t == start) return ring;
+  t = start;
+  while (true) {
+    int k = CornerOf(t, v);
+    t = nbr[t][(k + 2) % 3];
+    if (t < 0 || t == start || ring.size() >= 4096) break;
+    ring.push_back(t);
+  }
+  return ring;
+}
+
+std::vector<int> WorkMesh::Neighbours(int v) const {
+  std::vector<int> out;
+  for (int t : Ring(v)) {
+    int k = CornerOf(t, v);
+    for (int j : {tri[t][(k + 1) % 3], tri[t][(k + 2) % 3]})
+      if (std::find(out.begin(), out.end(), j) == out.end()) out.push_back(j);
+  }
+  return out;
+}
+
+void InitWorkMesh(const std::vector<std::array<int, 3>>& triangles,
+                  const std::vector<std::array<bool, 3>>& constrained,
+                  const std::vector<std::array<int, 2>>& splittable_segments, WorkMesh* m) {
+  const int nt = static_cast<int>(triangles.size());
+  m->tri = triangles;
+  m->nbr.assign(nt, {-1, -1, -1});
+  m->kind.assign(nt, {EdgeKind::kFree, EdgeKind::kFree, EdgeKind::kFree});
+  m->alive.assign(nt, 1);
+  m->free_slots.clear();
+  std::map<std::pair<int, int>, std::pair<int, int>> edges;  // directed edge -> (tri, corner)
+  for (int t = 0; t < nt; ++t) {
+    for (int i = 0; i < 3; ++i) {
+      int a = triangles[t][(i + 1) % 3], b = triangles[t][(i + 2) % 3];
+      edges[{a, b}] = {t, i};
+      m->node_tri[triangles[t][i]] = t;
+    }
+  }
+  for (const auto& s : splittable_segments) {
+    Vec2 d = m->uv[s[1]] - m->uv[s[0]];
+    int8_t axis = std::fabs(d.x) >= std::fabs(d.y) ? 0 : 1;
+    m->pole_axis[s[0]] = m->pole_axis[s[1]] = axis;
+  }
+  auto is_splittable = [&](int a, int b) {
+    for (const auto& s : splittable_segments)
+      if ((s[0] == a && s[1] == b) || (s[0] == b && s[1] == a)) return true;
+    return false;
+  };
+  for (int t = 0; t < nt; ++t) {
+    for (int i = 0; i < 3; ++i) {
+      int a = triangles[t][(i + 1) % 3], b = triangles[t][(i + 2) % 3];
+      auto it = edges.find({b, a});
+      if (it != edges.end()) m->nbr[t][i] = it->second.first;
+      if (constrained[t][i] || it == edges.end())
+        m->kind[t][i] = is_splittable(a, b) ? EdgeKind::kSplittable : EdgeKind::kFixed;
+    }
+  }
+}
+
+std::vector<int> ReplaceCavity(WorkMesh* m, const std::vector<int>& old_tris,
+                               const std::vector<Tri>& new_tris) {
+  // Border of the cavity: directed edge -> outside neighbour and kind.
+  struct Border {
+    int outside;
+    EdgeKind kind;
+  };
+  std::map<std::pair<int, int>, Border> border;
+  for (int t : old_tris) {
+    for (int i = 0; i < 3; ++i) {
+      int n = m->nbr[t][i];
+      if (n >= 0 && std::find(old_tris.begin(), old_tris.end(), n) != old_tris.end()) continue;
+      int a = m->tri[t][(i + 1) % 3], b = m->tri[t][(i + 2) % 3];
+      border[{a, b}] = {n, m->kind[t][i]};
+    }
+  }
+  for (int t : old_tris) m->alive[t] = 0;
+  std::vector<int> ids;
+  size_t reuse = 0;
+  for (const Tri& nt : new_tris) {
+    int id;
+    if (reuse < old_tris.size()) {
+      id = old_tris[reuse++];
+    } else if (!m->free_slots.empty()) {
+      id = m->free_slots.back();
+      m->free_slots.pop_back();
+    } else {
+      id = static_cast<int>(m->tri.size());
+      m->tri.push_back({});
+      m->nbr.push_back({});
+      m->kind.push_back({});
+      m->alive.push_back(0);
+    }
+    m->tri[id] = nt;
+    m->alive[id] = 1;
+    ids.push_back(id);
+  }
+  for (; reuse < old_tris.size(); ++reuse) m->free_slots.push_back(old_tris[reuse]);
+  // Link the new triangles to each other and to the border.
+  std::map<std::pair<int, int>, std::pair<int, int>> inner;
+  for (int id : ids)
+    for (int i = 0; i < 3; ++i)
+      inner[{m->tri[id][(i + 1) % 3], m->tri[id][(i + 2) % 3]}] = {id, i};
+  for (int id : ids) {
+    for (int i = 0; i < 3; ++i) {
+      int a = m->tri[id][(i + 1) % 3], b = m->tri[id][(i + 2) % 3];
+      m->node_tri[m->tri[id][i]] = id;
+      auto in = inner.find({b, a});
+      if (in != inner.end()) {
+        m->nbr[id][i] = in->second.first;
+        m->kind[id][i] = EdgeKind::kFree;
+        continue;
+      }
+      auto out = border.find({a, b});
+      if (out == border.end()) {  // a new piece of a pole edge (RebuildPoleFan)
+        m->nbr[id][i] = -1;
+        m->kind[id][i] = m->pole_axis[a] >= 0 && m->pole_axis[b] >= 0 ? EdgeKind::kSplittable
+                                                                      : EdgeKind::kFixed;
+        continue;
+      }
+      m->nbr[id][i] = out->second.outside;
+      m->kind[id][i] = out->second.kind;
+      int o = out->second.outside;
+      if (o >= 0) {
+        for (int j = 0; j < 3; ++j) {
+          if (m->tri[o][(j + 1) % 3] == b && m->tri[o][(j + 2) % 3] == a) m->nbr[o][j] = id;
+        }
+      }
+    }
+  }
+  return ids;
+}
+
+std::vector<Tri> SplitTriangleTris(const WorkMesh& m, int t, int n) {
+  const Tri& x = m.tri[t];
+  return {{x[0], x[1], n}, {x[1], x[2], n}, {x[2], x[0], n}};
+}
+
+void SplitEdgeTris(const WorkMesh& m, int t, int i, int n, std::vector<int>* cavity,
+                   std::vector<Tri>* tris) {
+  int a = m.tri[t][i], b = m.tri[t][(i + 1) % 3], c = m.tri[t][(i + 2) % 3];
+  *cavity = {t};
+  *tris = {{a, b, n}, {a, n, c}};
+  int u = m.nbr[t][i];
+  if (u >= 0) {
+    int d = m.tri[u][(m.CornerOf(u, b) + 1) % 3];  // u = (d, c, b) up to rotation
+    cavity->push_back(u);
+    tris->push_back({d, c, n});
+    tris->push_back({d, n, b});
+  }
+}
+
+bool FlipTris(const WorkMesh& m, int t, int i, std::vector<int>* cavity, std::vector<Tri>* tris) {
+  int u = m.nbr[t][i];
+  if (u < 0) return false;
+  int a = m.tri[t][i], b = m.tri[t][(i + 1) % 3], c = m.tri[t][(i + 2) % 3];
+  int d = m.tri[u][(m.CornerOf(u, b) + 1) % 3];
+  *cavity = {t, u};
+  *tris = {{a, b, d}, {a, d, c}};
+  return true;
+}
+
+void CollapseTris(const WorkMesh& m, int v, int w, std::vector<int>* cavity,
+                  std::vector<Tri>* tris) {
+  *cavity = m.Ring(v);
+  tris->clear();
+  for (int t : *cavity) {
+    if (m.CornerOf(t, w) >= 0) continue;
+    Tri x = m.tri[t];
+    x[m.CornerOf(t, v)] = w;
+    tris->push_back(x);
+  }
+}
+
+}  // namespace rdmesh
+
+namespace rdmesh {
+
+bool PoleFanTris(WorkMesh* m, int p, std::vector<int>* cavity, std::vector<Tri>* tris,
+                 std::vector<int>* new_nodes, double* shift) {
+  const int axis = m->pole_axis[p];
+  if (axis < 0) return false;
+  *cavity = m->Ring(p);
+  // Chain the link edges a -> b of the triangles (p, a, b) from a pole node onward.
+  std::map<int, int> next;
+  for (int t : *cavity) {
+    int k = m->CornerOf(t, p);
+    next[m->tri[t][(k + 1) % 3]] = m->tri[t][(k + 2) % 3];
+  }
+  std::map<int, int> prev;
+  for (auto [a, b] : next) prev[b] = a;
+  int start = -1;
+  for (auto [a, b] : next)
+    if (!prev.count(a)) start = a;
+  if (start < 0) return false;
+  std::vector<int> chain = {start};
+  while (next.count(chain.back()) && chain.size() <= cavity->size()) chain.push_back(next[chain.back()]);
+  if (chain.size() != cavity->size() + 1) return false;
+  const bool has_start = m->pole_axis[chain.front()] >= 0;
+  const bool has_end = m->pole_axis[chain.back()] >= 0;
+  if (!has_start && !has_end) return false;
+  // Regular ring nodes R_0..R_r between the pole neighbours.
+  std::vector<int> r(chain.begin() + (has_start ? 1 : 0), chain.end() - (has_end ? 1 : 0));
+  for (int x : r)
+    if (m->pole_axis[x] >= 0) return false;
+  const int fans = static_cast<int>(r.size()) - 1;
+  if (fans < 1) return false;
+  auto along = [&](Vec2 q) { return axis == 0 ? q.x : q.y; };
+  // One pole node per fan, under the middle of its ring edge. A fan that holds a fixed boundary
+  // edge (no pole neighbour on its side) keeps p.
+  std::vector<int> n(fans);
+  double worst = 0;
+  new_nodes->clear();
+  for (int j = 0; j < fans; ++j) {
+    if ((j == 0 && !has_start) || (j == fans - 1 && !has_end)) {
+      n[j] = p;
+      continue;
+    }
+    Vec2 q = m->uv[p];
+    double target = 0.5 * (along(m->uv[r[j]]) + along(m->uv[r[j + 1]]));
+    worst = std::max(worst, std::fabs(target - along(q)));
+    (axis == 0 ? q.x : q.y) = target;
+    n[j] = m->AddNode(q, m->xyz[p], m->normal[p], true, m->ref[p], axis);
+    new_nodes->push_back(n[j]);
+  }
+  *shift = worst;
+  tris->clear();
+  if (has_start) tris->push_back({n[0], chain.front(), r[0]});
+  for (int j = 0; j < fans; ++j) {
+    tris->push_back({n[j], r[j], r[j + 1]});
+    if (j + 1 < fans) tris->push_back({n[j + 1], n[j], r[j + 1]});
+  }
+  if (has_end) tris->push_back({n[fans - 1], r[fans], chain.back()});
+  return true;
+}
+
+}  // namespace rdmesh

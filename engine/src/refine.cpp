@@ -1,0 +1,483 @@
+#include "refine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <tuple>
+
+#include "pattern_search.h"
+
+namespace rdmesh {
+
+namespace {
+
+// A split point keeps at least this barycentric weight on every corner; an optimum closer to an
+// edge than kEdgeWeight splits that edge instead (the paper's Algorithm 3).
+constexpr double kMinWeight = 0.04;
+constexpr double kEdgeWeight = 0.12;
+
+class Refiner {
+ public:
+  Refiner(WorkMesh& m, Surface& s, const FaceCriteria& c, double su, double sv, Context* ctx,
+          RefineStats* stats)
+      : m_(m), s_(s), c_(c), su_(su), sv_(sv), ctx_(ctx), stats_(*stats) {}
+
+  Status RefineToCriteria(int64_t max_triangles);
+  Status Improve();
+  void Finish();
+
+ private:
+  struct Candidate {
+    std::vector<TriangleMeasure> measures;
+    double max_violation = 0;
+    double min_agreement = 1;
+  };
+
+  void Corners(const Tri& t, Vec2 uv[3], Vec3 p[3], Vec3 n[3]) const {
+    for (int i = 0; i < 3; ++i) uv[i] = m_.uv[t[i]], p[i] = m_.xyz[t[i]], n[i] = m_.normal[t[i]];
+  }
+  Candidate Evaluate(const std::vector<Tri>& tris) {
+    Candidate cand;
+    for (const Tri& t : tris) {
+      Vec2 uv[3];
+      Vec3 p[3], n[3];
+      Corners(t, uv, p, n);
+      cand.min_agreement = std::min(cand.min_agreement, TriangleAgreement(uv, p, n));
+      m_.MeasureCorners(t, uv, p);
+      cand.measures.push_back(MeasureTriangle(s_, uv, p, c_));
+      cand.max_violation = std::max(cand.max_violation, cand.measures.back().violation);
+    }
+    return cand;
+  }
+  double Agreement(int t) const {
+    Vec2 uv[3];
+    Vec3 p[3], n[3];
+    Corners(m_.tri[t], uv, p, n);
+    return TriangleAgreement(uv, p, n);
+  }
+  double MaxViolation(const std::vector<int>& tris) const {
+    double v = 0;
+    for (int t : tris) v = std::max(v, measure_[t].violation);
+    return v;
+  }
+  double MinAgreement(const std::vector<int>& tris) const {
+    double a = 1;
+    for (int t : tris) a = std::min(a, Agreement(t));
+    return a;
+  }
+  // An optimisation step may not fold a triangle, nor push agreement below the guard where the
+  // old triangles met it.
+  bool AgreementOk(double new_min, double old_min) const {
+    return new_min > 0 && new_min >= std::min(c_.min_normal_cos, old_min) - 1e-12;
+  }
+
+  int NewNode(Vec2 q, bool on_pole = false, int pole_of = -1) {
+    if (on_pole) {
+      return m_.AddNode(q, m_.xyz[pole_of], s_.Normal(q.x, q.y), true, m_.ref[pole_of],
+                        m_.pole_axis[pole_of]);
+    }
+    Vec3 x = s_.Point(q.x, q.y);
+    return m_.AddNode(q, x, s_.Normal(q.x, q.y), false, NodeRef{});
+  }
+  void DropLastNode() {
+    m_.uv.pop_back(), m_.xyz.pop_back(), m_.normal.pop_back(), m_.fixed.pop_back();
+    m_.ref.pop_back(), m_.node_tri.pop_back(), m_.pole_axis.pop_back();
+  }
+  std::vector<int> Apply(const std::vector<int>& cavity, const std::vector<Tri>& tris,
+                         const Candidate& cand) {
+    std::vector<int> ids = ReplaceCavity(&m_, cavity, tris);
+    if (measure_.size() < m_.tri.size()) {
+      measure_.resize(m_.tri.size());
+      stamp_.resize(m_.tri.size(), 0);
+    }
+    for (size_t k = 0; k < ids.size(); ++k) {
+      measure_[ids[k]] = cand.measures[k];
+      ++stamp_[ids[k]];
+      if (refining_ && cand.measures[k].violation > 1) Push(ids[k]);
+    }
+    for (int t : cavity)
+      if (!m_.alive[t]) ++stamp_[t];
+    return ids;
+  }
+  void Push(int t) { queue_.push({measure_[t].violation, t, stamp_[t]}); }
+
+  bool RealignPole(int p);
+  bool SplitTriangle(int t);
+  bool SplitEdge(int t, int i);
+  bool TryFlip(int t, int i);
+  void Legalize(int node);
+  int CollapsePass();
+  int FlipPass();
+  int SmoothPass();
+
+  WorkMesh& m_;
+  Surface& s_;
+  const FaceCriteria& c_;
+  double su_, sv_;
+  Context* ctx_;
+  RefineStats& stats_;
+  std::vector<TriangleMeasure> measure_;
+  std::vector<uint32_t> stamp_;
+  bool refining_ = false;
+  std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
+};
+
+Status Refiner::RefineToCriteria(int64_t max_triangles) {
+  measure_.resize(m_.tri.size());
+  stamp_.assign(m_.tri.size(), 0);
+  refining_ = true;
+  for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
+    if (!m_.alive[t]) continue;
+    Vec2 uv[3];
+    Vec3 p[3];
+    m_.MeasureCorners(t, uv, p);
+    measure_[t] = MeasureTriangle(s_, uv, p, c_);
+    if (measure_[t].violation > 1) Push(t);
+  }
+  int64_t ops = 0;
+  int64_t live = m_.TriangleCount();
+  while (!queue_.empty()) {
+    auto [violation, t, stamp] = queue_.top();
+    queue_.pop();
+    if (!m_.alive[t] || stamp != stamp_[t]) continue;
+    if (violation <= 1) break;
+    if (live >= max_triangles) {
+      stats_.budget_hit = true;
+      break;
+    }
+    if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
+    if (SplitTriangle(t)) live = static_cast<int64_t>(m_.tri.size() - m_.free_slots.size());
+  }
+  refining_ = false;
+  queue_ = {};
+  return Status::Ok();
+}
+
+bool Refiner::RealignPole(int p) {
+  std::vector<int> cavity, added;
+  std::vector<Tri> tris;
+  double shift = 0;
+  if (!PoleFanTris(&m_, p, &cavity, &tris, &added, &shift)) return false;
+  auto undo = [&] {
+    for (size_t k = 0; k < added.size(); ++k) DropLastNode();
+    return false;
+  };
+  // Already one aligned fan: nothing to do.
+  double span = std::max(m_.uv[p].x - s_.umin, s_.umax - s_.umin) + (s_.vmax - s_.vmin);
+  if (tris.size() == cavity.size() && shift <= 1e-9 * span) return undo();
+  for (const Tri& nt : tris)
+    if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return undo();
+  Candidate cand = Evaluate(tris);
+  if (!(cand.min_agreement > 0)) return undo();
+  Apply(cavity, tris, cand);
+  bool used = false;
+  for (const Tri& nt : tris) used = used || nt[0] == p || nt[1] == p || nt[2] == p;
+  if (!used) m_.node_tri[p] = -1;
+  return true;
+}
+
+bool Refiner::SplitTriangle(int t) {
+  const Tri tri = m_.tri[t];
+  // A fan triangle at a pole first gets a pole node of its own under it.
+  int poles = 0, pole = -1;
+  for (int i = 0; i < 3; ++i)
+    if (m_.pole_axis[tri[i]] >= 0) ++poles, pole = tri[i];
+  if (poles == 1 && RealignPole(pole)) return true;
+  Vec2 uv[3];
+  Vec3 p[3], n[3];
+  Corners(tri, uv, p, n);
+  const TriangleMeasure& mt = measure_[t];
+  // A triangle too long for max_length: split its longest edge in the middle when allowed.
+  double dev_ratio = c_.max_deviation > 0 ? mt.deviation / c_.max_deviation : 0;
+  double rd_ratio = c_.rd_tolerance > 0 ? mt.rd / c_.rd_tolerance : 0;
+  if (c_.max_length > 0 && mt.max_length / c_.max_length >= std::max(dev_ratio, rd_ratio)) {
+    int longest = 0;
+    double best = -1;
+    for (int i = 0; i < 3; ++i) {
+      double l = Dist(p[(i + 1) % 3], p[(i + 2) % 3]);
+      if (l > best) best = l, longest = i;
+    }
+    if (m_.kind[t][longest] != EdgeKind::kFixed && SplitEdge(t, longest)) return true;
+  }
+  // The area-optimal interior point (the paper's Algorithm 1), searched in barycentric
+  // coordinates from where the deviation peaks.
+  auto to_uv = [&](Vec2 b) { return (1 - b.x - b.y) * uv[0] + (b.x * uv[1] + b.y * uv[2]); };
+  double det = Orient(uv[0], uv[1], uv[2]);
+  Vec2 b0{1.0 / 3, 1.0 / 3};
+  if (det > 0) {
+    Vec2 w = mt.worst_uv;
+    b0 = {Orient(uv[0], w, uv[2]) / det, Orient(uv[0], uv[1], w) / det};
+  }
+  auto clamp_weights = [](Vec2 b, double lo) {
+    double w0 = std::max(1 - b.x - b.y, lo), w1 = std::max(b.x, lo), w2 = std::max(b.y, lo);
+    double sum = w0 + w1 + w2;
+    return Vec2{w1 / sum, w2 / sum};
+  };
+  b0 = clamp_weights(b0, 0.1);
+  auto feasible = [](Vec2 b) {
+    return b.x >= kMinWeight && b.y >= kMinWeight && 1 - b.x - b.y >= kMinWeight;
+  };
+  auto objective = [&](Vec2 b) { return SplitAreaRatio(s_, uv, p, to_uv(b)); };
+  PatternSearchResult r =
+      CrossPatternSearch(objective, feasible, b0, objective(b0), {0.08, 0.08}, 0.1, 30);
+  Vec2 b = r.x;
+  double w[3] = {1 - b.x - b.y, b.x, b.y};
+  int k = static_cast<int>(std::min_element(w, w + 3) - w);
+  if (w[k] < kEdgeWeight) {
+    if (m_.kind[t][k] != EdgeKind::kFixed && SplitEdge(t, k)) return true;
+    b = clamp_weights(b, kEdgeWeight);
+  }
+  for (Vec2 bb : {b, Vec2{1.0 / 3, 1.0 / 3}}) {
+    int node = NewNode(to_uv(bb));
+    std::vector<Tri> tris = SplitTriangleTris(m_, t, node);
+    Candidate cand = Evaluate(tris);
+    if (cand.min_agreement > 0) {
+      Apply({t}, tris, cand);
+      ++stats_.splits;
+      Legalize(node);
+      return true;
+    }
+    DropLastNode();
+  }
+  // Neither point keeps the children unfolded: try its edges before giving up on it.
+  for (int i = 0; i < 3; ++i)
+    if (m_.kind[t][i] != EdgeKind::kFixed && SplitEdge(t, i)) return true;
+  return false;
+}
+
+bool Refiner::SplitEdge(int t, int i) {
+  const int b = m_.tri[t][(i + 1) % 3], c = m_.tri[t][(i + 2) % 3];
+  const bool pole = m_.kind[t][i] == EdgeKind::kSplittable;
+  std::vector<int> cavity;
+  std::vector<Tri> tris;
+  auto place = [&](double s) { return (1 - s) * m_.uv[b] + s * m_.uv[c]; };
+  double s_best = 0.5;
+  if (!pole) {
+    // The paper's Algorithm 2: the point on the edge that maximises the area of the new
+    // triangles.
+    SplitEdgeTris(m_, t, i, -1, &cavity, &tris);
+    std::vector<Tri> shape = tris;
+    s_best = MaximizeOnInterval(
+        [&](double s) {
+          Vec2 q = place(s);
+          Vec3 x = s_.Point(q.x, q.y);
+          double area = 0;
+          for (const Tri& nt : shape) {
+            Vec3 pts[3];
+            for (int j = 0; j < 3; ++j) pts[j] = nt[j] < 0 ? x : m_.xyz[nt[j]];
+            area += Area(pts[0], pts[1], pts[2]);
+          }
+          return area;
+        },
+        0.3, 0.7, 3, 6, nullptr);
+  }
+  if (pole) {
+    // On a pole edge, put the new node under the apex, so the fan edge to it follows a
+    // parameter line (a meridian on a sphere).
+    double du = m_.uv[c].x - m_.uv[b].x, dv = m_.uv[c].y - m_.uv[b].y;
+    Vec2 apex = m_.uv[m_.tri[t][i]];
+    double along = (std::fabs(du) >= std::fabs(dv)) ? (apex.x - m_.uv[b].x) / du
+                                                    : (apex.y - m_.uv[b].y) / dv;
+    s_best = std::clamp(std::isfinite(along) ? along : 0.5, 0.2, 0.8);
+  }
+  int node = pole ? NewNode(place(s_best), true, b) : NewNode(place(s_best));
+  SplitEdgeTris(m_, t, i, node, &cavity, &tris);
+  Candidate cand = Evaluate(tris);
+  if (!(cand.min_agreement > 0)) {
+    DropLastNode();
+    return false;
+  }
+  Apply(cavity, tris, cand);
+  ++stats_.edge_splits;
+  Legalize(node);
+  return true;
+}
+
+bool Refiner::TryFlip(int t, int i) {
+  if (m_.kind[t][i] != EdgeKind::kFree) return false;
+  std::vector<int> cavity;
+  std::vector<Tri> tris;
+  if (!FlipTris(m_, t, i, &cavity, &tris)) return false;
+  // Both new triangles must keep positive orientation: a cheap test first.
+  for (const Tri& nt : tris)
+    if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return false;
+  double old_score = MaxViolation(cavity);
+  Candidate cand = Evaluate(tris);
+  if (!AgreementOk(cand.min_agreement, MinAgreement(cavity))) return false;
+  bool better = cand.max_violation < old_score * (1 - 1e-9);
+  if (!better && cand.max_violation <= old_score * (1 + 1e-12) && old_score == 0) {
+    // Ties (no criterion bites, e.g. planar): the larger 3D area, else keep.
+    double old_area = 0, new_area = 0;
+    for (int x : cavity) old_area += Area(m_.xyz[m_.tri[x][0]], m_.xyz[m_.tri[x][1]], m_.xyz[m_.tri[x][2]]);
+    for (const Tri& nt : tris) new_area += Area(m_.xyz[nt[0]], m_.xyz[nt[1]], m_.xyz[nt[2]]);
+    better = new_area > old_area * (1 + 1e-9);
+  }
+  if (!better) return false;
+  Apply(cavity, tris, cand);
+  ++stats_.flips;
+  return true;
+}
+
+void Refiner::Legalize(int node) {
+  // Lawson-style: test the edges opposite the new node; a flip brings two new such edges.
+  std::vector<int> stack = m_.Ring(node);
+  int budget = 64;
+  while (!stack.empty() && budget-- > 0) {
+    int t = stack.back();
+    stack.pop_back();
+    if (!m_.alive[t]) continue;
+    int k = m_.CornerOf(t, node);
+    if (k < 0) continue;
+    int u = m_.nbr[t][k];
+    if (TryFlip(t, k)) {
+      for (int x : {t, u})
+        if (x >= 0 && m_.alive[x] && m_.CornerOf(x, node) >= 0) stack.push_back(x);
+    }
+  }
+}
+
+int Refiner::CollapsePass() {
+  int count = 0;
+  const int n = m_.node_count();
+  for (int v = 0; v < n; ++v) {
+    if (m_.fixed[v] || m_.node_tri[v] < 0) continue;
+    std::vector<int> nv = m_.Neighbours(v);
+    std::vector<int> cavity = m_.Ring(v);
+    if (nv.size() != cavity.size()) continue;  // not a closed fan
+    double old_agree = MinAgreement(cavity);
+    int best_w = -1;
+    Candidate best;
+    std::vector<Tri> best_tris;
+    for (int w : nv) {
+      // Link condition: v and w share exactly the two apexes of the triangles on edge v-w.
+      std::vector<int> nw = m_.Neighbours(w);
+      int common = 0;
+      for (int x : nv) common += std::find(nw.begin(), nw.end(), x) != nw.end();
+      if (common != 2) continue;
+      std::vector<int> cav;
+      std::vector<Tri> tris;
+      CollapseTris(m_, v, w, &cav, &tris);
+      bool oriented = true;
+      for (const Tri& nt : tris)
+        oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
+      if (!oriented) continue;
+      Candidate cand = Evaluate(tris);
+      if (cand.max_violation > 1 || !AgreementOk(cand.min_agreement, old_agree)) continue;
+      if (best_w < 0 || cand.max_violation < best.max_violation) {
+        best_w = w, best = std::move(cand), best_tris = std::move(tris);
+      }
+    }
+    if (best_w < 0) continue;
+    Apply(cavity, best_tris, best);
+    m_.node_tri[v] = -1;
+    ++count;
+  }
+  stats_.collapses += count;
+  return count;
+}
+
+int Refiner::FlipPass() {
+  int count = 0;
+  for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
+    if (!m_.alive[t]) continue;
+    for (int i = 0; i < 3; ++i) {
+      if (!m_.alive[t]) break;
+      int u = m_.nbr[t][i];
+      if (u > t && TryFlip(t, i)) ++count;
+    }
+  }
+  return count;
+}
+
+int Refiner::SmoothPass() {
+  int count = 0;
+  const int n = m_.node_count();
+  for (int v = 0; v < n; ++v) {
+    if (m_.fixed[v] || m_.node_tri[v] < 0) continue;
+    std::vector<int> ring = m_.Ring(v);
+    std::vector<int> nv = m_.Neighbours(v);
+    if (nv.size() != ring.size()) continue;
+    std::vector<Tri> tris;
+    for (int t : ring) tris.push_back(m_.tri[t]);
+    const double old_score = MaxViolation(ring);
+    const double old_agree = MinAgreement(ring);
+    const Vec2 uv0 = m_.uv[v];
+    const Vec3 x0 = m_.xyz[v], n0 = m_.normal[v];
+    double r = 0;
+    for (int w : nv) {
+      Vec2 d = m_.uv[w] - uv0;
+      r += std::hypot(d.x * su_, d.y * sv_);
+    }
+    r /= nv.size();
+    Candidate best_cand;
+    auto objective = [&](Vec2 q) {
+      m_.uv[v] = q;
+      m_.xyz[v] = s_.Point(q.x, q.y);
+      m_.normal[v] = s_.Normal(q.x, q.y);
+      for (const Tri& nt : tris)
+        if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
+      Candidate cand = Evaluate(tris);
+      if (!AgreementOk(cand.min_agreement, old_agree)) return -HUGE_VAL;
+      return -cand.max_violation;
+    };
+    PatternSearchResult res = CrossPatternSearch(
+        objective, [](Vec2) { return true; }, uv0, -old_score, {0.2 * r / su_, 0.2 * r / sv_},
+        0.1, 24);
+    if (res.value > -old_score * (1 - 1e-6) || !(res.value > -HUGE_VAL)) {
+      m_.uv[v] = uv0, m_.xyz[v] = x0, m_.normal[v] = n0;
+      continue;
+    }
+    objective(res.x);  // leave v at the optimum
+    Candidate cand = Evaluate(tris);
+    for (size_t k = 0; k < ring.size(); ++k) {
+      measure_[ring[k]] = cand.measures[k];
+      ++stamp_[ring[k]];
+    }
+    ++count;
+  }
+  stats_.moves += count;
+  return count;
+}
+
+Status Refiner::Improve() {
+  for (int round = 0; round < 8; ++round) {
+    if (ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
+    int collapsed = CollapsePass();
+    FlipPass();
+    if (ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
+    SmoothPass();
+    int nodes = 0;
+    for (int v = 0; v < m_.node_count(); ++v) nodes += m_.node_tri[v] >= 0;
+    if (collapsed <= nodes / 500) break;
+  }
+  return Status::Ok();
+}
+
+void Refiner::Finish() {
+  stats_.max_violation = 0;
+  stats_.max_deviation = 0;
+  for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
+    if (!m_.alive[t]) continue;
+    stats_.max_violation = std::max(stats_.max_violation, measure_[t].violation);
+    stats_.max_deviation = std::max(stats_.max_deviation, measure_[t].deviation);
+  }
+}
+
+}  // namespace
+
+Status RefineFace(WorkMesh* mesh, Surface& surface, const FaceCriteria& criteria, double scale_u,
+                  double scale_v, int64_t max_triangles, bool improve, Context* context,
+                  RefineStats* stats) {
+  *stats = RefineStats();
+  Refiner refiner(*mesh, surface, criteria, scale_u, scale_v, context, stats);
+  Status st = refiner.RefineToCriteria(max_triangles);
+  if (!st.ok()) return st;
+  if (improve) {
+    st = refiner.Improve();
+    if (!st.ok()) return st;
+  }
+  refiner.Finish();
+  return Status::Ok();
+}
+
+}  // namespace rdmesh

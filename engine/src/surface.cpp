@@ -1,0 +1,150 @@
+#include "surface.h"
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepTools.hxx>
+#include <BRep_Tool.hxx>
+#include <GeomAdaptor_Surface.hxx>
+#include <GeomConvert.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <Geom_RectangularTrimmedSurface.hxx>
+#include <Geom_Surface.hxx>
+#include <gp_Pnt.hxx>
+#include <gp_Vec.hxx>
+
+namespace rdmesh {
+
+Vec3 Surface::Normal(double u, double v) {
+  // Central differences with a step of 1e-5 of the parameter range, nudged inside the bounds;
+  // at a pole, average the normals of four points around it.
+  double du = 1e-5 * std::max(umax - umin, 1e-12), dv = 1e-5 * std::max(vmax - vmin, 1e-12);
+  auto normal_at = [&](double uu, double vv) {
+    double u0 = std::max(uu - du, umin), u1 = std::min(uu + du, umax);
+    double v0 = std::max(vv - dv, vmin), v1 = std::min(vv + dv, vmax);
+    Vec3 su = Point(u1, vv) - Point(u0, vv);
+    Vec3 sv = Point(uu, v1) - Point(uu, v0);
+    return Cross(su, sv);
+  };
+  Vec3 n = normal_at(u, v);
+  double scale = Norm(Point(std::min(u + du, umax), v) - Point(u, v)) +
+                 Norm(Point(u, std::min(v + dv, vmax)) - Point(u, v));
+  if (Norm(n) > 1e-6 * scale * scale) return Normalized(n);
+  Vec3 sum;
+  for (double s : {-1.0, 1.0}) {
+    for (double t : {-1.0, 1.0}) {
+      double uu = std::clamp(u + s * 1e3 * du, umin, umax);
+      double vv = std::clamp(v + t * 1e3 * dv, vmin, vmax);
+      sum = sum + Normalized(normal_at(uu, vv));
+    }
+  }
+  return Normalized(sum);
+}
+
+namespace {
+
+class PlaneSurface final : public Surface {
+ public:
+  Vec3 Point(double u, double v) override { return {u, v, 0}; }
+  Vec3 Normal(double, double) override { return {0, 0, 1}; }
+};
+
+class CylinderSurface final : public Surface {
+ public:
+  explicit CylinderSurface(double r) : r_(r) {}
+  Vec3 Point(double u, double v) override { return {r_ * std::cos(u), r_ * std::sin(u), v}; }
+  Vec3 Normal(double u, double) override { return {std::cos(u), std::sin(u), 0}; }
+
+ private:
+  double r_;
+};
+
+class SphereSurface final : public Surface {
+ public:
+  explicit SphereSurface(double r) : r_(r) {}
+  Vec3 Point(double u, double v) override {
+    return {r_ * std::cos(v) * std::cos(u), r_ * std::cos(v) * std::sin(u), r_ * std::sin(v)};
+  }
+  Vec3 Normal(double u, double v) override {
+    return {std::cos(v) * std::cos(u), std::cos(v) * std::sin(u), std::sin(v)};
+  }
+
+ private:
+  double r_;
+};
+
+class CircleCurve final : public Curve {
+ public:
+  CircleCurve(double r, double z0) : r_(r), z0_(z0) {}
+  Vec3 Point(double t) override { return {r_ * std::cos(t), r_ * std::sin(t), z0_}; }
+
+ private:
+  double r_, z0_;
+};
+
+Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
+
+class OcctSurface final : public Surface {
+ public:
+  explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {}
+  Vec3 Point(double u, double v) override { return ToVec(adaptor_.Value(u, v)); }
+  Vec3 Normal(double u, double v) override {
+    gp_Pnt p;
+    gp_Vec su, sv;
+    adaptor_.D1(u, v, p, su, sv);
+    gp_Vec n = su.Crossed(sv);
+    double scale = su.SquareMagnitude() + sv.SquareMagnitude();
+    if (n.SquareMagnitude() > 1e-16 * scale * scale && scale > 0) {
+      n.Normalize();
+      return {n.X(), n.Y(), n.Z()};
+    }
+    return Surface::Normal(u, v);  // singular point: average around it
+  }
+
+ private:
+  GeomAdaptor_Surface adaptor_;
+};
+
+class OcctCurve final : public Curve {
+ public:
+  explicit OcctCurve(const TopoDS_Edge& edge) : adaptor_(edge) {}
+  Vec3 Point(double t) override { return ToVec(adaptor_.Value(t)); }
+
+ private:
+  BRepAdaptor_Curve adaptor_;
+};
+
+}  // namespace
+
+std::unique_ptr<Surface> MakePlaneSurface() { return std::make_unique<PlaneSurface>(); }
+std::unique_ptr<Surface> MakeCylinderSurface(double radius) {
+  return std::make_unique<CylinderSurface>(radius);
+}
+std::unique_ptr<Surface> MakeSphereSurface(double radius) {
+  return std::make_unique<SphereSurface>(radius);
+}
+std::unique_ptr<Curve> MakeCircleCurve(double radius, double z0) {
+  return std::make_unique<CircleCurve>(radius, z0);
+}
+
+std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs) {
+  Handle(Geom_Surface) surface = BRep_Tool::Surface(face);  // location applied
+  double u0, u1, v0, v1;
+  BRepTools::UVBounds(face, u0, u1, v0, v1);
+  if (nurbs) {
+    Handle(Geom_Surface) trimmed = new Geom_RectangularTrimmedSurface(surface, u0, u1, v0, v1);
+    surface = GeomConvert::SurfaceToBSplineSurface(trimmed);
+  }
+  auto s = std::make_unique<OcctSurface>(surface);
+  s->umin = u0;
+  s->umax = u1;
+  s->vmin = v0;
+  s->vmax = v1;
+  return s;
+}
+
+std::unique_ptr<Curve> MakeEdgeCurve(const TopoDS_Edge& edge) {
+  if (BRep_Tool::Degenerated(edge)) return nullptr;
+  // BRepAdaptor_Curve falls back to the curve on a surface when there is no 3D curve.
+  return std::make_unique<OcctCurve>(edge);
+}
+
+}  // namespace rdmesh

@@ -1,0 +1,51 @@
+#pragma once
+// Geometry evaluators: a surface S(u,v) and a curve C(t). The meshing stages see only these
+// interfaces; the OCCT evaluators are the real ones, the analytic plane, cylinder and sphere let
+// refinement be unit-tested without files.
+//
+// Evaluators cache state (OCCT adaptors do): one instance per thread.
+
+#include <memory>
+
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+
+#include "geom.h"
+
+namespace rdmesh {
+
+/// A parametric surface. Point() is all refinement needs; Normal() serves fold guards and output.
+class Surface {
+ public:
+  virtual ~Surface() = default;
+  /// S(u, v) in world coordinates (model units).
+  virtual Vec3 Point(double u, double v) = 0;
+  /// Unit normal Su x Sv of the parametrisation (not flipped for reversed faces). Where it is
+  /// undefined (a pole), the average of nearby normals. Default: central differences.
+  virtual Vec3 Normal(double u, double v);
+  /// Parameter bounds of the face (used to keep probes inside and to pick difference steps).
+  double umin = 0, umax = 1, vmin = 0, vmax = 1;
+};
+
+/// A parametric curve C(t) in world coordinates.
+class Curve {
+ public:
+  virtual ~Curve() = default;
+  virtual Vec3 Point(double t) = 0;
+};
+
+/// Analytic surfaces for tests. Plane z = 0 over [0,w]x[0,h]; cylinder of radius r along z,
+/// S(u,v) = (r cos u, r sin u, v); sphere of radius r, S(u,v) = r(cos v cos u, cos v sin u, sin v).
+std::unique_ptr<Surface> MakePlaneSurface();
+std::unique_ptr<Surface> MakeCylinderSurface(double radius);
+std::unique_ptr<Surface> MakeSphereSurface(double radius);
+/// Circle of radius r in the plane z = z0: C(t) = (r cos t, r sin t, z0).
+std::unique_ptr<Curve> MakeCircleCurve(double radius, double z0);
+
+/// OCCT evaluators for a located face / edge (the location is applied: world coordinates).
+/// `nurbs` converts the surface to a B-spline first.
+std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs);
+/// Null when the edge has no 3D curve (degenerate edges).
+std::unique_ptr<Curve> MakeEdgeCurve(const TopoDS_Edge& edge);
+
+}  // namespace rdmesh
