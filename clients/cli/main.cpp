@@ -1,0 +1,220 @@
+// rdmesh: the command line front end of the engine.
+//   rdmesh mesh MODEL -o OUT [options] [--json] [--quiet]
+//   rdmesh info MODEL [--json]
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "exit_codes.h"
+#include "mesh_flags.h"
+#include "progress.h"
+#include "rdmesh/engine.h"
+#include "report.h"
+
+namespace rdmesh::cli {
+
+namespace {
+
+// The context of the current run, for the SIGINT handler (Cancel() is one atomic store).
+Context* g_interrupt_context = nullptr;
+
+void OnInterrupt(int) {
+  if (g_interrupt_context != nullptr) g_interrupt_context->Cancel();
+}
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct CommonFlags {
+  std::string model;
+  bool json = false;
+  bool quiet = false;
+};
+
+// Prints the error on stderr and, with --json, as the last stdout line; returns `code`.
+int Fail(const CommonFlags& flags, int code, const Status& status) {
+  std::cerr << "rdmesh: error: " << status.message() << "\n";
+  if (flags.json) {
+    nlohmann::ordered_json error = {
+        {"error", {{"code", StatusCodeName(status.code())}, {"message", status.message()}}},
+        {"exit_code", code}};
+    std::cout << error.dump() << std::endl;
+  }
+  return code;
+}
+
+// The exit code for a failed load or meshing run that was stopped (timeout, Ctrl-C).
+Status StopMessage(const Status& status, double timeout_seconds, const std::string& what) {
+  if (status.code() == StatusCode::kDeadlineExceeded) {
+    char seconds[32];
+    std::snprintf(seconds, sizeof(seconds), "%g", timeout_seconds);
+    return Status(status.code(),
+                  std::string("timed out after ") + seconds + " s (--timeout) while " + what);
+  }
+  return Status(status.code(), "interrupted while " + what);
+}
+
+bool IsStop(const Status& status) {
+  return status.code() == StatusCode::kCancelled || status.code() == StatusCode::kDeadlineExceeded;
+}
+
+Result<std::shared_ptr<const Model>> Load(const CommonFlags& flags, Context* context,
+                                          double* seconds) {
+  auto start = std::chrono::steady_clock::now();
+  auto model = LoadModel(flags.model, context);
+  *seconds = SecondsSince(start);
+  return model;
+}
+
+int RunInfoCommand(const CommonFlags& flags) {
+  double load_seconds = 0.0;
+  Context context;
+  g_interrupt_context = &context;
+  auto model = Load(flags, &context, &load_seconds);
+  if (!model.ok()) {
+    if (IsStop(model.status()))
+      return Fail(flags, kExitStopped,
+                  StopMessage(model.status(), 0, "loading '" + flags.model + "'"));
+    return Fail(flags, kExitBadModel, model.status());
+  }
+  ModelInfo info = GetModelInfo(**model);
+  if (flags.json) {
+    nlohmann::ordered_json json = ModelInfoJson(info);
+    json["load_seconds"] = load_seconds;
+    std::cout << json.dump() << std::endl;
+  } else if (!flags.quiet) {
+    PrintModelInfo(info, std::cout);
+  }
+  return kExitOk;
+}
+
+int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const std::string& output,
+                   bool strict) {
+  Result<MeshOptions> options = BuildMeshOptions(mesh_flags);
+  if (!options.ok()) return Fail(flags, kExitUsage, options.status());
+  std::string extension = std::filesystem::path(output).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  bool known = false;
+  std::string formats;
+  for (const std::string& format : SupportedOutputFormats()) {
+    known = known || format == extension;
+    formats += " " + format;
+  }
+  if (!known)
+    return Fail(
+        flags, kExitUsage,
+        Status(StatusCode::kInvalidArgument,
+               "cannot write '" + output + "': unknown output format (use one of" + formats + ")"));
+
+  Context context;
+  g_interrupt_context = &context;
+  context.SetTimeout(options->timeout_seconds);
+  RunInfo run;
+  run.model_path = flags.model;
+  run.output_path = output;
+  auto model = Load(flags, &context, &run.load_seconds);
+  if (!model.ok()) {
+    if (IsStop(model.status()))
+      return Fail(
+          flags, kExitStopped,
+          StopMessage(model.status(), options->timeout_seconds, "loading '" + flags.model + "'"));
+    return Fail(flags, kExitBadModel, model.status());
+  }
+  ModelInfo info = GetModelInfo(**model);
+  for (int id : options->face_ids)
+    if (id > info.faces)
+      return Fail(flags, kExitUsage,
+                  Status(StatusCode::kInvalidArgument,
+                         "--faces: face " + std::to_string(id) + " does not exist ('" +
+                             flags.model + "' has faces 1-" + std::to_string(info.faces) + ")"));
+
+  TerminalProgress progress(!flags.quiet);
+  context.set_progress_callback([&progress](const Progress& p) { progress.Update(p); });
+  Result<MeshResult> result = MeshModel(**model, *options, &context);
+  progress.Finish();
+  if (!result.ok()) {
+    if (IsStop(result.status()))
+      return Fail(
+          flags, kExitStopped,
+          StopMessage(result.status(), options->timeout_seconds, "meshing '" + flags.model + "'"));
+    if (result.status().code() == StatusCode::kInvalidArgument)
+      return Fail(flags, kExitUsage, result.status());
+    return Fail(flags, kExitMeshFailed, result.status());
+  }
+
+  auto write_start = std::chrono::steady_clock::now();
+  Status written = WriteMesh(**model, *result, output);
+  run.write_seconds = SecondsSince(write_start);
+  if (!written.ok()) return Fail(flags, kExitWriteFailed, written);
+
+  if (!flags.quiet) PrintMeshReport(info, *result, run, flags.json ? std::cerr : std::cout);
+  if (flags.json) std::cout << MeshReportJson(*result, run).dump() << std::endl;
+
+  const MeshSummary& summary = result->summary;
+  if (summary.faces_failed > 0 && (strict || summary.faces_ok == 0)) {
+    std::cerr << "rdmesh: error: " << summary.faces_failed << " face"
+              << (summary.faces_failed == 1 ? "" : "s") << " of '" << flags.model
+              << "' failed to mesh" << (strict ? " (--strict)" : "") << "\n";
+    return kExitMeshFailed;
+  }
+  return kExitOk;
+}
+
+void AddCommonFlags(CLI::App* command, CommonFlags* flags) {
+  command->add_option("model", flags->model, "Model file: .step/.stp, .iges/.igs or .brep")
+      ->required();
+  command->add_flag("--json", flags->json,
+                    "Print one JSON object on stdout as the last line (the human summary goes "
+                    "to stderr)");
+  command->add_flag("-q,--quiet", flags->quiet, "Print nothing but errors (and --json)");
+}
+
+}  // namespace
+
+int Main(int argc, char** argv) {
+  CLI::App app{
+      "rdmesh: watertight surface meshes of CAD models (STEP, IGES, BREP).\n"
+      "Exit codes: 0 ok, 1 meshing failed (or --strict and a face failed), 2 bad "
+      "usage, 3 cannot read the model, 4 timeout or interrupted, 5 cannot write the "
+      "output."};
+  app.require_subcommand(1);
+
+  CommonFlags mesh_common;
+  MeshFlags mesh_flags;
+  std::string output;
+  bool strict = false;
+  CLI::App* mesh = app.add_subcommand("mesh", "Mesh a model and write the mesh");
+  AddCommonFlags(mesh, &mesh_common);
+  std::string formats;
+  for (const std::string& format : SupportedOutputFormats()) formats += " " + format;
+  mesh->add_option("-o,--output", output, "Output file; the extension picks the format:" + formats)
+      ->required();
+  mesh->add_flag("--strict", strict, "Exit with code 1 when any face fails to mesh");
+  AddMeshFlags(mesh, &mesh_flags);
+
+  CommonFlags info_common;
+  CLI::App* info = app.add_subcommand("info", "Print what a model holds");
+  AddCommonFlags(info, &info_common);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  }
+
+  std::signal(SIGINT, OnInterrupt);
+  if (mesh->parsed()) return RunMeshCommand(mesh_common, mesh_flags, output, strict);
+  return RunInfoCommand(info_common);
+}
+
+}  // namespace rdmesh::cli
+
+int main(int argc, char** argv) { return rdmesh::cli::Main(argc, argv); }

@@ -1,0 +1,129 @@
+#include "mesh_flags.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <regex>
+#include <sstream>
+
+namespace rdmesh::cli {
+
+namespace {
+
+Status BadFaces(const std::string& item) {
+  return Status(StatusCode::kInvalidArgument,
+                "--faces: '" + item + "' is not a face id or a range like 2-5 (ids start at 1)");
+}
+
+// A positive int, or 0 when the text is not one.
+int ParseId(const std::string& text) {
+  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) return 0;
+  errno = 0;
+  long value = std::strtol(text.c_str(), nullptr, 10);
+  return errno == 0 && value >= 1 && value <= 100000000 ? static_cast<int>(value) : 0;
+}
+
+// Names MeshOptions fields as the flags that set them: "max_deviation" -> "--max-deviation".
+std::string FlagNames(std::string message) {
+  static const std::regex kField(
+      "\\b(max_deviation_rel|max_deviation|rd_tolerance|max_triangles|min_edge_length|"
+      "max_edge_length|threads|timeout_seconds)\\b");
+  std::string result;
+  auto begin = std::sregex_iterator(message.begin(), message.end(), kField);
+  size_t last = 0;
+  for (auto it = begin; it != std::sregex_iterator(); ++it) {
+    result += message.substr(last, it->position() - last);
+    std::string flag = it->str() == "timeout_seconds" ? "timeout" : it->str();
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    result += "--" + flag;
+    last = it->position() + it->length();
+  }
+  return result + message.substr(last);
+}
+
+}  // namespace
+
+void AddMeshFlags(CLI::App* app, MeshFlags* flags) {
+  MeshOptions& o = flags->options;
+  app->add_option("--max-deviation", o.max_deviation,
+                  "Largest mesh-to-surface distance, in model units (mm for STEP/IGES); "
+                  "0 = use --max-deviation-rel")
+      ->capture_default_str()
+      ->group("Meshing");
+  app->add_option("--max-deviation-rel", o.max_deviation_rel,
+                  "Largest distance as a fraction of the bounding-box diagonal (used when "
+                  "--max-deviation is 0)")
+      ->capture_default_str()
+      ->group("Meshing");
+  app->add_option("--rd-tolerance", o.rd_tolerance,
+                  "Representation-deficit tolerance, scale free (a segment turning by theta "
+                  "has RD ~ theta^2/24); 0 = off")
+      ->capture_default_str()
+      ->group("Meshing");
+  app->add_option("--max-triangles", o.max_triangles,
+                  "Triangle budget for the whole model: the smallest deviation that fits; "
+                  "0 = no budget")
+      ->capture_default_str()
+      ->group("Meshing");
+  app->add_option("--min-edge-length", o.min_edge_length,
+                  "Never split below this 3D edge length, in model units; 0 = off")
+      ->capture_default_str()
+      ->group("Meshing");
+  app->add_option("--max-edge-length", o.max_edge_length,
+                  "Split every edge longer than this, in model units; 0 = off")
+      ->capture_default_str()
+      ->group("Meshing");
+  app->add_flag("--nurbs", o.nurbs,
+                "Convert every face to a B-spline surface before meshing (default: exact "
+                "surfaces)")
+      ->group("Meshing");
+  app->add_option("--threads", o.threads, "Worker threads; 0 = all cores")
+      ->capture_default_str()
+      ->group("Meshing");
+  app->add_option("--faces", flags->faces,
+                  "Mesh only these face ids, e.g. 1,5,7 or 2-9 (default: all faces)")
+      ->group("Meshing");
+  app->add_option("--timeout", o.timeout_seconds,
+                  "Stop with exit code 4 after this many seconds (loading and meshing); "
+                  "0 = no limit")
+      ->capture_default_str()
+      ->group("Meshing");
+}
+
+Result<std::vector<int>> ParseFaceList(const std::string& text) {
+  std::vector<int> ids;
+  std::stringstream items(text);
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    item.erase(std::remove_if(item.begin(), item.end(), ::isspace), item.end());
+    size_t dash = item.find('-');
+    if (dash == std::string::npos) {
+      int id = ParseId(item);
+      if (id == 0) return BadFaces(item);
+      ids.push_back(id);
+      continue;
+    }
+    int first = ParseId(item.substr(0, dash));
+    int last = ParseId(item.substr(dash + 1));
+    if (first == 0 || last < first || last - first > 10000000) return BadFaces(item);
+    for (int id = first; id <= last; ++id) ids.push_back(id);
+  }
+  if (ids.empty()) return BadFaces(text);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
+}
+
+Result<MeshOptions> BuildMeshOptions(const MeshFlags& flags) {
+  MeshOptions options = flags.options;
+  if (!flags.faces.empty()) {
+    Result<std::vector<int>> ids = ParseFaceList(flags.faces);
+    if (!ids.ok()) return ids.status();
+    options.face_ids = *ids;
+  }
+  Status valid = ValidateOptions(options);
+  if (!valid.ok()) return Status(valid.code(), FlagNames(valid.message()));
+  return options;
+}
+
+}  // namespace rdmesh::cli

@@ -1,0 +1,37 @@
+#pragma once
+// What the command line prints: human-readable summaries and their JSON forms.
+
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <string>
+
+#include "rdmesh/engine.h"
+
+namespace rdmesh::cli {
+
+/// Timings and paths of one `rdmesh mesh` run, beside what MeshResult holds.
+struct RunInfo {
+  std::string model_path;
+  std::string output_path;
+  double load_seconds = 0.0;   ///< reading the model file
+  double write_seconds = 0.0;  ///< writing the output file
+};
+
+/// ModelInfo as a JSON object with the same field names.
+nlohmann::ordered_json ModelInfoJson(const ModelInfo& info);
+
+/// The run as one JSON object: triangles, nodes, seconds (meshing, not loading), load_seconds,
+/// write_seconds, requested_deviation, estimated_deviation, mesh_area, exact_area, faces_ok,
+/// faces_failed, faces_skipped, model, output, and faces: [{id, surface_type, triangles,
+/// deviation, area_error (|area - exact| / exact, null when exact is 0), status, reason}].
+nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& run);
+
+/// Multi-line human summary of a model.
+void PrintModelInfo(const ModelInfo& info, std::ostream& out);
+
+/// Multi-line human summary of a run: model, faces ok/failed (with reasons), triangles, nodes,
+/// times, requested and estimated deviation, areas and the output file.
+void PrintMeshReport(const ModelInfo& info, const MeshResult& result, const RunInfo& run,
+                     std::ostream& out);
+
+}  // namespace rdmesh::cli
