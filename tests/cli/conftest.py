@@ -1,0 +1,107 @@
+"""Fixtures for the rdmesh CLI tests: the binary, models, and the independent checkers."""
+
+import json
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+GLTF_VALIDATE_JS = r"""
+const validator = require('gltf-validator');
+const fs = require('fs');
+const bytes = new Uint8Array(fs.readFileSync(process.argv[2]));
+validator.validateBytes(bytes, {maxIssues: 100}).then((report) => {
+  console.log(JSON.stringify({
+    errors: report.issues.numErrors,
+    warnings: report.issues.numWarnings,
+    triangles: report.info.totalTriangleCount,
+    messages: report.issues.messages.slice(0, 10),
+  }));
+}).catch((error) => { console.error(String(error)); process.exit(1); });
+"""
+
+
+def _env_path(name):
+    value = os.environ.get(name)
+    assert value, f"{name} is not set (run these tests through ctest)"
+    return pathlib.Path(value)
+
+
+@pytest.fixture(scope="session")
+def cli():
+    path = _env_path("RDMESH_CLI")
+    assert path.is_file(), f"no rdmesh binary at {path}"
+    return path
+
+
+@pytest.fixture(scope="session")
+def data_dir():
+    return _env_path("RDMESH_TEST_DATA")
+
+
+@pytest.fixture(scope="session")
+def shared_dir():
+    return _env_path("RDMESH_SHARED_DIR")
+
+
+class Run:
+    """The outcome of one rdmesh invocation."""
+
+    def __init__(self, completed):
+        self.code = completed.returncode
+        self.stdout = completed.stdout
+        self.stderr = completed.stderr
+
+    @property
+    def json(self):
+        lines = [line for line in self.stdout.splitlines() if line.strip()]
+        assert lines, f"no stdout; stderr: {self.stderr}"
+        return json.loads(lines[-1])
+
+
+@pytest.fixture(scope="session")
+def run(cli):
+    def run_cli(*args, timeout=600):
+        completed = subprocess.run([str(cli), *map(str, args)], capture_output=True, text=True,
+                                   timeout=timeout)
+        return Run(completed)
+
+    return run_cli
+
+
+@pytest.fixture(scope="session")
+def gltf_validate():
+    """Validates a .glb with the Khronos glTF validator (npm gltf-validator, installed on first
+    use under the build tree)."""
+    node_dir = _env_path("RDMESH_NODE_DIR")
+    if not (node_dir / "node_modules" / "gltf-validator").is_dir():
+        node_dir.mkdir(parents=True, exist_ok=True)
+        subprocess.run(["npm", "install", "--prefix", str(node_dir), "--no-audit", "--no-fund",
+                        "gltf-validator"], check=True, capture_output=True, timeout=600)
+    script = node_dir / "validate_gltf.js"
+    script.write_text(GLTF_VALIDATE_JS)
+
+    def validate(path):
+        completed = subprocess.run(["node", str(script), str(path)], capture_output=True,
+                                   text=True, timeout=300, cwd=node_dir)
+        assert completed.returncode == 0, completed.stderr
+        return json.loads(completed.stdout)
+
+    return validate
+
+
+@pytest.fixture(scope="session")
+def meshbench(shared_dir):
+    """The independent yardstick scorer: `meshbench eval MODEL MESH.msh` -> dict."""
+    yardstick = shared_dir / "yardstick"
+    subprocess.run(["sh", str(yardstick / "build.sh")], check=True, capture_output=True,
+                   timeout=900)
+
+    def evaluate(model, mesh):
+        completed = subprocess.run([str(yardstick / "meshbench"), "eval", str(model), str(mesh)],
+                                   capture_output=True, text=True, timeout=600)
+        assert completed.returncode == 0, completed.stderr
+        return json.loads(completed.stdout.strip().splitlines()[-1])
+
+    return evaluate

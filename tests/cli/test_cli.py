@@ -1,0 +1,239 @@
+"""End-to-end tests of `rdmesh mesh` and `rdmesh info`: options, JSON, exit codes, and every
+output format read back by an independent reader with the triangle count the run reported."""
+
+import os
+
+import pytest
+
+# Models that mesh in well under a second; nist_mbe_pmi_11.stp is used for info and timeouts.
+FAST_MODELS = ["cq_red_cube_blue_cylinder.step", "axom_sliced_cylinder.step",
+               "pyocc_eight_cyl.stp"]
+FORMATS = [".msh", ".stl", ".obj", ".ply", ".vtu", ".glb"]
+MESH_OPTIONS = ["--max-deviation", "--max-deviation-rel", "--rd-tolerance", "--max-triangles",
+                "--min-edge-length", "--max-edge-length", "--nurbs", "--threads", "--faces",
+                "--timeout", "--strict", "--json", "--quiet", "--output"]
+JSON_FIELDS = ["triangles", "nodes", "seconds", "load_seconds", "requested_deviation",
+               "estimated_deviation", "mesh_area", "exact_area", "faces_ok", "faces_failed",
+               "output", "faces"]
+FACE_FIELDS = ["id", "surface_type", "triangles", "deviation", "area_error", "status", "reason"]
+
+
+def gmsh_triangles(path):
+    import gmsh
+
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        count = 0
+        for dim, tag in gmsh.model.getEntities(2):
+            types, tags, _ = gmsh.model.mesh.getElements(dim, tag)
+            assert all(t == 2 for t in types)  # 3-node triangles only
+            count += sum(len(t) for t in tags)
+        surfaces = len(gmsh.model.getEntities(2))
+    finally:
+        gmsh.finalize()
+    return count, surfaces
+
+
+def meshio_triangles(path):
+    import meshio
+
+    mesh = meshio.read(str(path))
+    assert all(block.type == "triangle" for block in mesh.cells)
+    return sum(len(block.data) for block in mesh.cells), mesh
+
+
+def test_help_lists_every_option_with_defaults(run):
+    result = run("mesh", "--help")
+    assert result.code == 0
+    for option in MESH_OPTIONS:
+        assert option in result.stdout, option
+    assert "model units" in result.stdout
+    assert "--max-deviation-rel FLOAT=0.001" in result.stdout
+    assert "--threads INT=0" in result.stdout
+    assert run("info", "--help").code == 0
+    assert run("--help").code == 0
+
+
+def test_info_json(run, data_dir):
+    info = run("info", data_dir / "nist_mbe_pmi_11.stp", "--json")
+    assert info.code == 0, info.stderr
+    model = info.json
+    assert model["name"] == "nist_mbe_pmi_11.stp"
+    assert model["format"] == "step"
+    assert model["length_unit"] == "mm"
+    assert model["faces"] == 10
+    assert model["unique_faces"] == 10
+    assert model["solids"] == 1
+    assert model["closed"] is True
+    assert sum(model["surface_types"].values()) == model["faces"]
+    xmin, ymin, zmin, xmax, ymax, zmax = model["bbox"]
+    diagonal = ((xmax - xmin) ** 2 + (ymax - ymin) ** 2 + (zmax - zmin) ** 2) ** 0.5
+    assert model["diagonal"] == pytest.approx(diagonal)
+    assert model["load_seconds"] >= 0
+
+    assembly = run("info", data_dir / "cq_red_cube_blue_cylinder.step", "--json").json
+    assert sorted(assembly["part_names"]) == ["blue_cylinder", "red_cube"]
+    assert assembly["instances"] == 2
+    assert assembly["length_unit"] == "m"
+    assert assembly["unit_scale_mm"] == 1000.0
+
+
+def test_info_human(run, data_dir):
+    result = run("info", data_dir / "cq_red_cube_blue_cylinder.step")
+    assert result.code == 0
+    assert "9 faces" in result.stdout
+    assert "red_cube" in result.stdout
+
+
+@pytest.mark.parametrize("model", FAST_MODELS)
+@pytest.mark.parametrize("extension", FORMATS)
+def test_every_format_reads_back(run, data_dir, tmp_path, gltf_validate, model, extension):
+    output = tmp_path / ("out" + extension)
+    result = run("mesh", data_dir / model, "-o", output, "--json")
+    assert result.code == 0, result.stderr
+    report = result.json
+    triangles = report["triangles"]
+    assert triangles > 0
+    assert output.is_file()
+
+    if extension == ".msh":
+        # meshio 5 cannot read parametric MSH 4.1 nodes: gmsh is the reference reader.
+        count, surfaces = gmsh_triangles(output)
+        assert surfaces == len(report["faces"])
+    elif extension == ".glb":
+        validation = gltf_validate(output)
+        assert validation["errors"] == 0, validation["messages"]
+        count = validation["triangles"]  # counts every placed instance
+    else:
+        count, mesh = meshio_triangles(output)
+        if extension == ".ply":
+            assert len(mesh.points) == report["nodes"]
+            assert mesh.cell_data["face_id"][0].min() >= 1
+        if extension == ".vtu":
+            assert len(mesh.points) == report["nodes"]
+            assert mesh.point_data["Normals"].shape == (report["nodes"], 3)
+            assert set(mesh.cell_data["face_id"][0]) <= {f["id"] for f in report["faces"]}
+    assert count == triangles
+
+
+def test_json_report(run, data_dir, tmp_path):
+    output = tmp_path / "cq.msh"
+    result = run("mesh", data_dir / "cq_red_cube_blue_cylinder.step", "-o", output, "--json")
+    assert result.code == 0, result.stderr
+    report = result.json
+    for field in JSON_FIELDS:
+        assert field in report, field
+    assert report["output"] == str(output)
+    assert report["seconds"] >= 0 and report["load_seconds"] >= 0
+    assert report["faces_ok"] == 9 and report["faces_failed"] == 0
+    assert len(report["faces"]) == 9
+    assert sum(face["triangles"] for face in report["faces"]) == report["triangles"]
+    for face in report["faces"]:
+        for field in FACE_FIELDS:
+            assert field in face, field
+        assert face["status"] == "ok"
+        assert face["area_error"] < 0.05
+        assert face["deviation"] <= report["estimated_deviation"] + 1e-12
+    assert report["requested_deviation"] > 0
+    assert report["exact_area"] == pytest.approx(report["mesh_area"], rel=0.05)
+    # The human summary goes to stderr with --json.
+    assert "triangles" in result.stderr and str(output) in result.stderr
+
+
+def test_human_report(run, data_dir, tmp_path):
+    output = tmp_path / "cyl.stl"
+    result = run("mesh", data_dir / "axom_sliced_cylinder.step", "-o", output)
+    assert result.code == 0, result.stderr
+    for word in ["5 ok, 0 failed", "triangles", "nodes", "requested", "estimated", str(output)]:
+        assert word in result.stdout, word
+    assert run("mesh", data_dir / "axom_sliced_cylinder.step", "-o", output, "-q").stdout == ""
+
+
+@pytest.mark.parametrize("model", ["sphere.step", "cylinder.step"])
+def test_msh_passes_the_yardstick(run, shared_dir, tmp_path, meshbench, model):
+    path = shared_dir / "yardstick" / "models" / model
+    output = tmp_path / "out.msh"
+    result = run("mesh", path, "-o", output, "--json", "--max-deviation-rel", "1e-3")
+    assert result.code == 0, result.stderr
+    score = meshbench(path, output)
+    assert score["triangles"] == result.json["triangles"]
+    assert score["faces_covered"] == score["faces"]
+    assert score["free_edges"] == 0
+    assert score["nonmanifold_edges"] == 0
+    assert score["inverted"] == 0
+
+
+def test_face_subset(run, data_dir, tmp_path):
+    output = tmp_path / "subset.vtu"
+    result = run("mesh", data_dir / "cq_red_cube_blue_cylinder.step", "-o", output, "--json",
+                 "--faces", "1,3-4")
+    assert result.code == 0, result.stderr
+    report = result.json
+    statuses = {face["id"]: face["status"] for face in report["faces"]}
+    assert [i for i, s in statuses.items() if s == "ok"] == [1, 3, 4]
+    assert report["faces_ok"] == 3
+    count, _ = meshio_triangles(output)
+    assert count == report["triangles"]
+
+
+def test_bad_model_files(run, data_dir, tmp_path):
+    missing = tmp_path / "missing.step"
+    result = run("mesh", missing, "-o", tmp_path / "out.msh")
+    assert result.code == 3
+    assert "missing.step" in result.stderr and "no such file" in result.stderr
+
+    garbage = tmp_path / "garbage.step"
+    garbage.write_bytes(os.urandom(4096))
+    result = run("info", garbage, "--json")
+    assert result.code == 3
+    assert "garbage.step" in result.stderr
+    assert result.json["error"]["code"] == "parse_error"
+    assert result.json["exit_code"] == 3
+
+    empty = tmp_path / "empty.stp"
+    empty.write_bytes(b"")
+    result = run("mesh", empty, "-o", tmp_path / "out.msh")
+    assert result.code == 3 and "empty" in result.stderr
+
+    half = tmp_path / "half.stp"
+    whole = (data_dir / "nist_mbe_pmi_11.stp").read_bytes()
+    half.write_bytes(whole[: len(whole) // 2])
+    result = run("mesh", half, "-o", tmp_path / "out.msh")
+    assert result.code == 3 and "truncated" in result.stderr
+
+
+def test_usage_errors(run, data_dir, tmp_path):
+    model = data_dir / "axom_sliced_cylinder.step"
+    out = tmp_path / "out.msh"
+    assert run("mesh", model).code == 2  # no -o
+    assert run("mesh", model, "-o", out, "--no-such-flag").code == 2
+    assert run().code == 2
+    result = run("mesh", model, "-o", out, "--max-deviation", "-1")
+    assert result.code == 2 and "--max-deviation" in result.stderr
+    result = run("mesh", model, "-o", out, "--max-deviation", "abc")
+    assert result.code == 2
+    result = run("mesh", model, "-o", out, "--faces", "2,x")
+    assert result.code == 2 and "'x'" in result.stderr
+    result = run("mesh", model, "-o", out, "--faces", "99")
+    assert result.code == 2 and "99" in result.stderr
+    result = run("mesh", model, "-o", tmp_path / "out.xyz")
+    assert result.code == 2 and ".msh" in result.stderr
+    assert not out.exists()
+
+
+def test_unwritable_output(run, data_dir, tmp_path):
+    out = tmp_path / "no_such_dir" / "out.glb"
+    result = run("mesh", data_dir / "axom_sliced_cylinder.step", "-o", out)
+    assert result.code == 5
+    assert str(out) in result.stderr
+
+
+def test_timeout(run, data_dir, tmp_path):
+    result = run("mesh", data_dir / "nist_mbe_pmi_11.stp", "-o", tmp_path / "out.msh",
+                 "--timeout", "0.05", "--json", timeout=60)
+    assert result.code == 4
+    assert "timed out" in result.stderr
+    assert result.json["error"]["code"] == "deadline_exceeded"
+    assert not (tmp_path / "out.msh").exists()
