@@ -6,6 +6,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -16,10 +17,14 @@
 #include "progress.h"
 #include "rdmesh/engine.h"
 #include "report.h"
+#include "watchdog.h"
 
 namespace rdmesh::cli {
 
 namespace {
+
+// Seconds past --timeout after which the watchdog ends a run that did not stop by itself.
+constexpr double kWatchdogGrace = 2.0;
 
 // The context of the current run, for the SIGINT handler (Cancel() is one atomic store).
 Context* g_interrupt_context = nullptr;
@@ -116,6 +121,15 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   Context context;
   g_interrupt_context = &context;
   context.SetTimeout(options->timeout_seconds);
+  // The engine stops itself at the deadline; should a stage miss it, end the process anyway.
+  Watchdog watchdog(options->timeout_seconds > 0 ? options->timeout_seconds + kWatchdogGrace : 0,
+                    [&flags, &options] {
+                      Fail(flags, kExitStopped,
+                           StopMessage(Status(StatusCode::kDeadlineExceeded, ""),
+                                       options->timeout_seconds, "meshing '" + flags.model + "'"));
+                      std::fflush(stdout);
+                      std::_Exit(kExitStopped);
+                    });
   RunInfo run;
   run.model_path = flags.model;
   run.output_path = output;
@@ -139,6 +153,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   context.set_progress_callback([&progress](const Progress& p) { progress.Update(p); });
   Result<MeshResult> result = MeshModel(**model, *options, &context);
   progress.Finish();
+  watchdog.Disarm();  // writing is not bounded by --timeout
   if (!result.ok()) {
     if (IsStop(result.status()))
       return Fail(
