@@ -208,6 +208,21 @@ pb::Stage ToProto(Progress::Stage stage) {
   return pb::STAGE_UNSPECIFIED;
 }
 
+Progress::Stage FromProto(pb::Stage stage) {
+  switch (stage) {
+    case pb::STAGE_EDGES:
+      return Progress::Stage::kEdges;
+    case pb::STAGE_FACES:
+      return Progress::Stage::kFaces;
+    case pb::STAGE_ASSEMBLY:
+      return Progress::Stage::kAssembly;
+    case pb::STAGE_DONE:
+      return Progress::Stage::kDone;
+    default:
+      return Progress::Stage::kLoading;
+  }
+}
+
 SurfaceType SurfaceTypeFromName(const std::string& name) {
   for (int t = static_cast<int>(SurfaceType::kPlane); t <= static_cast<int>(SurfaceType::kOther);
        ++t) {

@@ -40,6 +40,7 @@ ModelFormat FormatFromName(const std::string& name);
 pb::FaceStatus ToProto(FaceStatus status);
 FaceStatus FromProto(pb::FaceStatus status);
 pb::Stage ToProto(Progress::Stage stage);
+Progress::Stage FromProto(pb::Stage stage);
 SurfaceType SurfaceTypeFromName(const std::string& name);
 
 /// Run totals; the server fills total_seconds and face_messages itself.

@@ -64,6 +64,14 @@ bool ReadText(const std::string& path, std::string* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // SIGTERM/SIGINT are taken by a thread of their own (sigwait): block them first, before gRPC
+  // or anything else starts a thread, so that every thread inherits the mask.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
   Flags flags;
   flags.service.version = RDMESH_VERSION;
   CLI::App app{"rdmeshd: the rdmesh meshing service (gRPC)"};
@@ -163,14 +171,6 @@ int main(int argc, char** argv) {
             "listening on " + flags.listen + " without TLS: traffic (and any token) is plain text");
   }
 
-  // SIGTERM/SIGINT are taken by a thread of their own (sigwait): block them here, before any
-  // other thread starts, so that every thread inherits the mask.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGINT);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-
   // Register grpc.health.v1's descriptors so that reflection can describe the health service.
   (void)grpc::health::v1::HealthCheckRequest::descriptor();
   grpc::EnableDefaultHealthCheckService(true);
@@ -240,8 +240,23 @@ int main(int argc, char** argv) {
     LogLine(spdlog::level::warn, "-",
             fmt::format("grace period over: cancelling {} jobs", service.busy_jobs()));
   }
+  // Shutdown cancels what is left; the engine then stops within a second. Should it not, exit
+  // anyway after a few seconds rather than hang (with a non-zero code: jobs were abandoned).
+  std::atomic<bool> stopped{false};
+  std::thread watchdog([&stopped] {
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (!stopped && std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    if (!stopped) {
+      LogLine(spdlog::level::err, "-", "jobs did not stop 5 s after cancellation; exiting");
+      std::_Exit(3);
+    }
+  });
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(200));
   server->Wait();
+  stopped = true;
+  watchdog.join();
   LogLine(spdlog::level::info, "-", "stopped");
   return 0;
 }

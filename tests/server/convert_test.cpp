@@ -127,8 +127,12 @@ TEST(ConvertEnumsTest, FormatsStatusesAndStages) {
   for (FaceStatus s : {FaceStatus::kOk, FaceStatus::kFailed, FaceStatus::kSkipped}) {
     EXPECT_EQ(FromProto(ToProto(s)), s);
   }
+  for (Progress::Stage stage :
+       {Progress::Stage::kLoading, Progress::Stage::kEdges, Progress::Stage::kFaces,
+        Progress::Stage::kAssembly, Progress::Stage::kDone}) {
+    EXPECT_EQ(FromProto(ToProto(stage)), stage);
+  }
   EXPECT_EQ(ToProto(Progress::Stage::kFaces), pb::STAGE_FACES);
-  EXPECT_EQ(ToProto(Progress::Stage::kDone), pb::STAGE_DONE);
   for (int t = 0; t <= static_cast<int>(SurfaceType::kOther); ++t) {
     const auto type = static_cast<SurfaceType>(t);
     EXPECT_EQ(SurfaceTypeFromName(SurfaceTypeName(type)), type);

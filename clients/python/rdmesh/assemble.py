@@ -17,8 +17,10 @@ def assemble(faces, node_count=None):
         triangle_face  (T,)   int32, the B-rep face id of each triangle
 
     A node shared by several faces (a boundary node) has one global id and appears once. When
-    every global id 0..node_count-1 is used, row i of xyz is global node i. Faces without global
-    ids (older servers) get their own nodes, so the result is then not welded.
+    every global id 0..node_count-1 is used, row i of xyz is global node i, and the arrays equal
+    the engine's own assembled mesh: triangles that collapse (two equal global ids, at a pole)
+    are left out as the engine does. Faces without global ids get nodes of their own, so the
+    result is then not welded.
     """
     faces = sorted((f for f in faces if f.status == "ok" and len(f.triangles)),
                    key=lambda f: f.face_id)
@@ -39,9 +41,12 @@ def assemble(faces, node_count=None):
         used[ids[k]] = True
     # Compact: drop ids that no assembled face uses (a face subset, failed faces).
     remap = np.cumsum(used, dtype=np.int64) - 1
-    triangles = [remap[ids[k]][np.asarray(f.triangles, dtype=np.int64)]
-                 for k, f in enumerate(faces)]
-    triangle_face = [np.full(len(f.triangles), f.face_id, dtype=np.int32) for f in faces]
     if not faces:
         return (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int32))
+    triangles, triangle_face = [], []
+    for k, f in enumerate(faces):
+        tri = ids[k][np.asarray(f.triangles, dtype=np.int64).reshape(-1, 3)]
+        keep = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 2] != tri[:, 0])
+        triangles.append(remap[tri[keep]])
+        triangle_face.append(np.full(int(keep.sum()), f.face_id, dtype=np.int32))
     return xyz[used], np.concatenate(triangles), np.concatenate(triangle_face)

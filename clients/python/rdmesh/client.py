@@ -54,7 +54,7 @@ class FaceResult:
     reason: str
     xyz: np.ndarray  # (n, 3) float64
     triangles: np.ndarray  # (m, 3) int32, face-local node ids, counter-clockwise from outside
-    global_ids: np.ndarray  # (n,) int64, node ids in the assembled mesh
+    global_ids: np.ndarray  # (n,) int64, node ids in the assembled mesh (empty unless ok)
     uv: Optional[np.ndarray] = None  # (n, 2) float64, when asked for
     normals: Optional[np.ndarray] = None  # (n, 3) float64, when asked for
     max_deviation: float = 0.0
@@ -87,7 +87,7 @@ class _FaceParts:
 
     def __init__(self, first):
         self.first = first
-        self.xyz, self.uv, self.normals, self.ids, self.triangles = [], [], [], [], []
+        self.xyz, self.uv, self.normals, self.triangles = [], [], [], []
         self.count = 0
 
     def add(self, part):
@@ -98,7 +98,6 @@ class _FaceParts:
         self.xyz.append(np.array(part.xyz, dtype=np.float64))
         self.uv.append(np.array(part.uv, dtype=np.float64))
         self.normals.append(np.array(part.normals, dtype=np.float64))
-        self.ids.append(np.array(part.global_ids, dtype=np.int64))
         self.triangles.append(np.array(part.triangles, dtype=np.int32))
         return self.count == part.chunk_count
 
@@ -111,7 +110,7 @@ class _FaceParts:
             status=_FACE_STATUS.get(f.status, "unspecified"), reason=f.reason,
             xyz=np.concatenate(self.xyz).reshape(-1, 3),
             triangles=np.concatenate(self.triangles).reshape(-1, 3),
-            global_ids=np.concatenate(self.ids), uv=uv if len(uv) else None,
+            global_ids=np.zeros(0, dtype=np.int64), uv=uv if len(uv) else None,
             normals=normals if len(normals) else None, max_deviation=f.max_deviation,
             area=f.area, exact_area=f.exact_area, seconds=f.seconds, messages=self.count)
 
@@ -207,6 +206,7 @@ class Client:
         started = summary = None
         parts: Dict[int, _FaceParts] = {}
         faces: Dict[int, FaceResult] = {}
+        ids: Dict[int, list] = {}
         largest = 0
         faces_done = 0
         try:
@@ -231,6 +231,10 @@ class Client:
                         if progress and started is not None:
                             faces_done = max(faces_done, len(faces))
                             progress(Progress("faces", faces_done, started.faces_requested))
+                elif kind == "node_ids":
+                    chunk = event.node_ids
+                    ids.setdefault(chunk.face_id, []).append(
+                        np.array(chunk.global_ids, dtype=np.int64))
                 elif kind == "summary":
                     summary = event.summary
         except grpc.RpcError as error:
@@ -238,6 +242,13 @@ class Client:
         if started is None or summary is None or parts:
             raise RdmeshError(grpc.StatusCode.INTERNAL, "the Mesh stream ended early")
         ordered = [faces[k] for k in sorted(faces)]
+        for face in ordered:
+            if face.face_id in ids:
+                face.global_ids = np.concatenate(ids[face.face_id])
+            if face.status == "ok" and len(face.global_ids) != len(face.xyz):
+                raise RdmeshError(grpc.StatusCode.INTERNAL,
+                                  "face %d: %d global ids for %d nodes"
+                                  % (face.face_id, len(face.global_ids), len(face.xyz)))
         xyz, triangles, triangle_face = assemble(ordered, summary.nodes)
         return MeshResult(model=started.model, options=started.options, summary=summary,
                           faces=ordered, xyz=xyz, triangles=triangles,
@@ -283,7 +294,8 @@ def mesh_options(**options) -> "pb.MeshOptions":
 
 
 def iter_faces(events: Iterator) -> Iterator[FaceResult]:
-    """Yields each face of a raw Mesh event stream as soon as its last part arrives."""
+    """Yields each face of a raw Mesh event stream as soon as its last part arrives (without
+    global ids: those come in node_ids events once the faces are welded)."""
     parts: Dict[int, _FaceParts] = {}
     for event in events:
         if event.WhichOneof("event") == "face":

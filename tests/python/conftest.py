@@ -1,0 +1,159 @@
+"""Fixtures: an rdmeshd daemon on a free loopback port, clients, paths.
+
+Environment (set by tests/python/CMakeLists.txt; the defaults fit a build in <repo>/build):
+  RDMESH_RDMESHD      the rdmeshd binary
+  RDMESH_CLI          the local rdmesh CLI binary
+  RDMESH_PY_GEN_DIR   where the Python stubs were generated (read by the rdmesh package)
+  RDMESH_TEST_DATA    tests/data
+  RDMESH_PROTOC       protoc, for the reflection test's own stubs
+"""
+
+import os
+import pathlib
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+BUILD = REPO / "build"
+RDMESHD = os.environ.get("RDMESH_RDMESHD", str(BUILD / "bin" / "rdmeshd"))
+CLI = os.environ.get("RDMESH_CLI", str(BUILD / "bin" / "rdmesh"))
+DATA = pathlib.Path(os.environ.get("RDMESH_TEST_DATA", str(REPO / "tests" / "data")))
+PROTOC = os.environ.get("RDMESH_PROTOC", "protoc")
+RDMESH_PY = REPO / "clients" / "python" / "rdmesh-py"
+sys.path.insert(0, str(REPO / "clients" / "python"))
+
+from rdmesh import Client  # noqa: E402
+
+CUBE = DATA / "cq_red_cube_blue_cylinder.step"
+NIST = DATA / "nist_mbe_pmi_11.stp"
+CYLINDER = DATA / "axom_sliced_cylinder.step"
+EIGHT_CYL = DATA / "pyocc_eight_cyl.stp"
+CLK_TCK = os.sysconf("SC_CLK_TCK")
+
+
+class Daemon:
+    """One rdmeshd process listening on 127.0.0.1:<free port>, logging to a file."""
+
+    def __init__(self, log_path, args=(), env=None):
+        self.log_path = log_path
+        self.args = ["--listen", "127.0.0.1:0", "--threads", "2", *args]
+        self._log = open(log_path, "w")
+        full_env = dict(os.environ)
+        full_env.update(env or {})
+        self.proc = subprocess.Popen([RDMESHD, *self.args], stdout=self._log,
+                                     stderr=subprocess.STDOUT, env=full_env)
+        self.address = self._wait_for_port()
+        self._clients = []
+
+    def _wait_for_port(self, timeout=20.0):
+        end = time.monotonic() + timeout
+        pattern = re.compile(r"listening on (\S+):(\d+) ")
+        while time.monotonic() < end:
+            match = pattern.search(self.log())
+            if match:
+                return "%s:%s" % (match.group(1), match.group(2))
+            if self.proc.poll() is not None:
+                raise RuntimeError("rdmeshd exited with %s:\n%s" % (self.proc.returncode,
+                                                                    self.log()))
+            time.sleep(0.02)
+        raise RuntimeError("rdmeshd did not start listening:\n" + self.log())
+
+    def log(self):
+        return self.log_path.read_text()
+
+    def client(self, **kwargs):
+        client = Client(self.address, **kwargs)
+        self._clients.append(client)
+        return client
+
+    def wait_serving(self, timeout=10.0):
+        client = self.client()
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            try:
+                if client.health(timeout=1.0) == "SERVING":
+                    return
+            except Exception:  # noqa: BLE001 - not up yet
+                pass
+            time.sleep(0.05)
+        raise RuntimeError("rdmeshd never became SERVING")
+
+    def alive(self):
+        return self.proc.poll() is None
+
+    def cpu_seconds(self):
+        """User + system CPU time of the whole process (all threads), seconds."""
+        fields = pathlib.Path("/proc/%d/stat" % self.proc.pid).read_text().rsplit(")", 1)[1]
+        values = fields.split()
+        return (int(values[11]) + int(values[12])) / CLK_TCK  # utime, stime
+
+    def stop(self, sig=signal.SIGTERM, timeout=20.0):
+        """Sends `sig` and returns the exit code."""
+        for client in self._clients:
+            client.close()
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+            try:
+                self.proc.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+                raise
+        self._log.close()
+        return self.proc.returncode
+
+
+@pytest.fixture
+def start_daemon(tmp_path):
+    """Starts daemons with extra flags; each one must exit cleanly (code 0) on SIGTERM."""
+    daemons = []
+
+    def start(*args, env=None):
+        daemon = Daemon(tmp_path / ("rdmeshd-%d.log" % len(daemons)), args, env)
+        daemons.append(daemon)
+        daemon.wait_serving()
+        return daemon
+
+    yield start
+    for daemon in daemons:
+        code = daemon.stop()
+        assert code == 0, "rdmeshd exited with %s:\n%s" % (code, daemon.log()[-3000:])
+
+
+@pytest.fixture(scope="module")
+def daemon(tmp_path_factory):
+    """A daemon shared by a module's tests (default limits, 2 threads per job)."""
+    d = Daemon(tmp_path_factory.mktemp("rdmeshd") / "rdmeshd.log", ["--max-jobs", "2"])
+    d.wait_serving()
+    yield d
+    code = d.stop()
+    assert code == 0, d.log()[-3000:]
+
+
+@pytest.fixture
+def client(daemon):
+    return daemon.client()
+
+
+def wait_until(predicate, timeout, interval=0.02):
+    """Polls `predicate` until it is true; returns the seconds it took, or None on timeout."""
+    start = time.monotonic()
+    while time.monotonic() - start < timeout:
+        if predicate():
+            return time.monotonic() - start
+        time.sleep(interval)
+    return None
+
+
+def edge_use_counts(triangles):
+    """How many triangles use each undirected edge of a (T, 3) array."""
+    import numpy as np
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    edges.sort(axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return counts
