@@ -1,0 +1,176 @@
+#include "remote_client.h"
+
+#include <grpcpp/grpcpp.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <thread>
+#include <utility>
+
+#include "convert.h"
+#include "rdmesh/v1/rdmesh.grpc.pb.h"
+#include "status_map.h"
+
+namespace rdmesh::cli {
+namespace {
+
+namespace pb = ::rdmesh::v1;
+constexpr std::size_t kChunkBytes = 1u << 20;
+
+Result<std::string> ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status(StatusCode::kNotFound, "cannot open '" + path + "'");
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+std::string Trim(std::string text) {
+  const char* kSpace = " \t\r\n";
+  const std::size_t begin = text.find_first_not_of(kSpace);
+  if (begin == std::string::npos) return "";
+  return text.substr(begin, text.find_last_not_of(kSpace) - begin + 1);
+}
+
+/// A channel with the credentials the environment asks for.
+Result<std::shared_ptr<grpc::Channel>> Connect(const std::string& address) {
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (const char* ca = std::getenv("RDMESH_TLS_CA"); ca != nullptr && *ca != '\0') {
+    Result<std::string> pem = ReadFile(ca);
+    if (!pem.ok()) return Status(StatusCode::kIoError, "RDMESH_TLS_CA: " + pem.status().message());
+    grpc::SslCredentialsOptions tls;
+    tls.pem_root_certs = *pem;
+    credentials = grpc::SslCredentials(tls);
+  }
+  grpc::ChannelArguments arguments;
+  arguments.SetMaxReceiveMessageSize(64 << 20);
+  return grpc::CreateCustomChannel(address, credentials, arguments);
+}
+
+/// Adds the bearer token from RDMESH_TOKEN / RDMESH_TOKEN_FILE, if any.
+Status AddToken(grpc::ClientContext* call) {
+  std::string token;
+  if (const char* value = std::getenv("RDMESH_TOKEN"); value != nullptr) token = value;
+  if (const char* file = std::getenv("RDMESH_TOKEN_FILE"); token.empty() && file != nullptr) {
+    Result<std::string> content = ReadFile(file);
+    if (!content.ok()) {
+      return Status(StatusCode::kIoError, "RDMESH_TOKEN_FILE: " + content.status().message());
+    }
+    token = *content;
+  }
+  token = Trim(token);
+  if (!token.empty()) call->AddMetadata("authorization", "Bearer " + token);
+  return Status::Ok();
+}
+
+/// Cancels `call` as soon as the context asks to stop, until destroyed.
+class StopWatcher {
+ public:
+  StopWatcher(Context* context, grpc::ClientContext* call)
+      : thread_([this, context, call] {
+          while (!done_) {
+            if (context->ShouldStop()) {
+              call->TryCancel();
+              return;
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+          }
+        }) {}
+  ~StopWatcher() {
+    done_ = true;
+    thread_.join();
+  }
+
+ private:
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+/// The engine status for a failed call: the context's own stop, or the server's error.
+Status CallFailed(const grpc::Status& status, Context* context, const std::string& address) {
+  if (context->ShouldStop()) return context->StopStatus();
+  if (status.error_code() == grpc::StatusCode::UNAVAILABLE) {
+    return Status(StatusCode::kIoError,
+                  "rdmeshd at " + address + " is unavailable: " + status.error_message());
+  }
+  return server::FromGrpcStatus(status);
+}
+
+}  // namespace
+
+Result<MeshResult> MeshRemote(const std::string& address, const std::string& model_path,
+                              const MeshOptions& options, Context* context) {
+  Context local;
+  if (context == nullptr) context = &local;
+  if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
+  Result<std::shared_ptr<grpc::Channel>> channel = Connect(address);
+  if (!channel.ok()) return channel.status();
+  std::unique_ptr<pb::Rdmesh::Stub> stub = pb::Rdmesh::NewStub(*channel);
+  Result<std::string> bytes = ReadFile(model_path);
+  if (!bytes.ok()) return bytes.status();
+
+  // 1. Upload (a cached model is not parsed again).
+  pb::ModelInfo uploaded;
+  {
+    grpc::ClientContext call;
+    if (Status token = AddToken(&call); !token.ok()) return token;
+    StopWatcher watcher(context, &call);
+    std::unique_ptr<grpc::ClientWriter<pb::ModelChunk>> writer =
+        stub->UploadModel(&call, &uploaded);
+    const std::string name = model_path.substr(model_path.find_last_of('/') + 1);
+    for (std::size_t offset = 0; offset == 0 || offset < bytes->size(); offset += kChunkBytes) {
+      pb::ModelChunk chunk;
+      chunk.set_data(bytes->substr(offset, kChunkBytes));
+      if (offset == 0) {
+        chunk.set_name(name);
+        chunk.set_total_bytes(bytes->size());
+      }
+      if (!writer->Write(chunk)) break;  // the server answered early; Finish says why
+    }
+    writer->WritesDone();
+    grpc::Status status = writer->Finish();
+    if (!status.ok()) return CallFailed(status, context, address);
+  }
+
+  // 2. Mesh, rebuilding the result from the stream.
+  pb::MeshRequest request;
+  request.mutable_model()->set_model_id(uploaded.model_id());
+  *request.mutable_options() = server::ToProto(options);
+  request.mutable_return_fields()->set_uv(true);
+  request.mutable_return_fields()->set_normals(true);
+  request.mutable_return_fields()->set_node_topology(true);
+  grpc::ClientContext call;
+  if (Status token = AddToken(&call); !token.ok()) return token;
+  server::MeshResultBuilder builder;
+  grpc::Status status;
+  {
+    StopWatcher watcher(context, &call);
+    std::unique_ptr<grpc::ClientReader<pb::MeshEvent>> reader = stub->Mesh(&call, request);
+    pb::MeshEvent event;
+    Status added = Status::Ok();
+    while (reader->Read(&event)) {
+      if (event.has_progress()) {
+        Progress progress;
+        progress.stage = server::FromProto(event.progress().stage());
+        progress.done = event.progress().done();
+        progress.total = event.progress().total();
+        context->ReportProgress(progress);
+        continue;
+      }
+      if (added.ok()) added = builder.Add(event);
+      if (!added.ok()) call.TryCancel();
+    }
+    status = reader->Finish();
+    if (!added.ok()) {
+      return Status(StatusCode::kInternal, "unexpected stream from rdmeshd: " + added.message());
+    }
+  }
+  if (!status.ok()) return CallFailed(status, context, address);
+  return builder.Finish();
+}
+
+}  // namespace rdmesh::cli
