@@ -17,6 +17,9 @@
 #include "progress.h"
 #include "rdmesh/engine.h"
 #include "report.h"
+#ifdef RDMESH_WITH_REMOTE
+#include "remote_client.h"
+#endif
 #include "watchdog.h"
 
 namespace rdmesh::cli {
@@ -101,7 +104,7 @@ int RunInfoCommand(const CommonFlags& flags) {
 }
 
 int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const std::string& output,
-                   bool strict) {
+                   bool strict, const std::string& remote) {
   Result<MeshOptions> options = BuildMeshOptions(mesh_flags);
   if (!options.ok()) return Fail(flags, kExitUsage, options.status());
   std::string extension = std::filesystem::path(output).extension().string();
@@ -151,7 +154,12 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
 
   TerminalProgress progress(!flags.quiet);
   context.set_progress_callback([&progress](const Progress& p) { progress.Update(p); });
+#ifdef RDMESH_WITH_REMOTE
+  Result<MeshResult> result = remote.empty() ? MeshModel(**model, *options, &context)
+                                             : MeshRemote(remote, flags.model, *options, &context);
+#else
   Result<MeshResult> result = MeshModel(**model, *options, &context);
+#endif
   progress.Finish();
   watchdog.Disarm();  // writing is not bounded by --timeout
   if (!result.ok()) {
@@ -205,6 +213,7 @@ int Main(int argc, char** argv) {
   MeshFlags mesh_flags;
   std::string output;
   bool strict = false;
+  std::string remote;
   CLI::App* mesh = app.add_subcommand("mesh", "Mesh a model and write the mesh");
   AddCommonFlags(mesh, &mesh_common);
   std::string formats;
@@ -212,6 +221,11 @@ int Main(int argc, char** argv) {
   mesh->add_option("-o,--output", output, "Output file; the extension picks the format:" + formats)
       ->required();
   mesh->add_flag("--strict", strict, "Exit with code 1 when any face fails to mesh");
+#ifdef RDMESH_WITH_REMOTE
+  mesh->add_option("--remote", remote,
+                   "Mesh on the rdmeshd server at HOST:PORT (same options, same output; see "
+                   "docs/SERVICE.md)");
+#endif
   AddMeshFlags(mesh, &mesh_flags);
 
   CommonFlags info_common;
@@ -226,7 +240,7 @@ int Main(int argc, char** argv) {
   }
 
   std::signal(SIGINT, OnInterrupt);
-  if (mesh->parsed()) return RunMeshCommand(mesh_common, mesh_flags, output, strict);
+  if (mesh->parsed()) return RunMeshCommand(mesh_common, mesh_flags, output, strict, remote);
   return RunInfoCommand(info_common);
 }
 
