@@ -6,6 +6,7 @@ Environment (set by tests/python/CMakeLists.txt; the defaults fit a build in <re
   RDMESH_PY_GEN_DIR   where the Python stubs were generated (read by the rdmesh package)
   RDMESH_TEST_DATA    tests/data
   RDMESH_PROTOC       protoc, for the reflection test's own stubs
+  RDMESH_MAKE_INSTANCES  tests/server's make_instanced_brep (test data of many instances)
 """
 
 import os
@@ -24,6 +25,8 @@ RDMESHD = os.environ.get("RDMESH_RDMESHD", str(BUILD / "bin" / "rdmeshd"))
 CLI = os.environ.get("RDMESH_CLI", str(BUILD / "bin" / "rdmesh"))
 DATA = pathlib.Path(os.environ.get("RDMESH_TEST_DATA", str(REPO / "tests" / "data")))
 PROTOC = os.environ.get("RDMESH_PROTOC", "protoc")
+MAKE_INSTANCES = os.environ.get("RDMESH_MAKE_INSTANCES") or str(BUILD / "bin" /
+                                                                 "make_instanced_brep")
 RDMESH_PY = REPO / "clients" / "python" / "rdmesh-py"
 sys.path.insert(0, str(REPO / "clients" / "python"))
 
@@ -153,7 +156,8 @@ def wait_until(predicate, timeout, interval=0.02):
 def edge_use_counts(triangles):
     """How many triangles use each undirected edge of a (T, 3) array."""
     import numpy as np
-    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
-    edges.sort(axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return counts
+    t = np.asarray(triangles, dtype=np.int64)
+    a = np.concatenate([t[:, 0], t[:, 1], t[:, 2]])
+    b = np.concatenate([t[:, 1], t[:, 2], t[:, 0]])
+    keys = np.minimum(a, b) * (int(t.max()) + 1) + np.maximum(a, b)
+    return np.unique(keys, return_counts=True)[1]
