@@ -27,6 +27,46 @@ double QuadraticPeak(double h0, double h1, double h2, double peak[3]) {
   return best;
 }
 
+// The surface over the triangle as a height field h(lambda) = sum c_ij lambda_i lambda_j (zero at
+// the corners), fitted through the three edge-midpoint samples where they actually fall: a
+// (u,v) midpoint maps beside the 3D midpoint on a distorted parametrisation, so each sample is
+// projected onto the plane and placed by its own barycentric coordinates. Returns max |h|.
+double FittedPeak(const Vec3 p[3], Vec3 nh, const Vec3 mid[3], double peak[3]) {
+  Vec3 e1 = Normalized(p[1] - p[0]);
+  Vec3 e2 = Cross(nh, e1);
+  Vec2 c[3] = {{0, 0}, {Dot(p[1] - p[0], e1), 0}, {Dot(p[2] - p[0], e1), Dot(p[2] - p[0], e2)}};
+  double area = Orient(c[0], c[1], c[2]);
+  double rows[3][3], rhs[3];
+  for (int k = 0; k < 3; ++k) {
+    Vec3 d = mid[k] - p[0];
+    Vec2 x{Dot(d, e1), Dot(d, e2)};
+    double l0 = Orient(x, c[1], c[2]) / area, l1 = Orient(c[0], x, c[2]) / area;
+    double l2 = 1 - l0 - l1;
+    rows[k][0] = l1 * l2, rows[k][1] = l2 * l0, rows[k][2] = l0 * l1;
+    rhs[k] = Dot(d, nh);
+  }
+  auto det3 = [](double a[3][3]) {
+    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+           a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  };
+  double det = det3(rows);
+  // The exact midpoints give det = 1/64; a fit far from that is ill-posed (badly distorted
+  // parametrisation): fall back to the plain midpoint model.
+  if (!(std::fabs(det) > 0.25 / 64)) return QuadraticPeak(rhs[0], rhs[1], rhs[2], peak);
+  double coef[3];
+  for (int j = 0; j < 3; ++j) {
+    double a[3][3];
+    for (int r = 0; r < 3; ++r)
+      for (int q = 0; q < 3; ++q) a[r][q] = q == j ? rhs[r] : rows[r][q];
+    coef[j] = det3(a) / det;
+  }
+  double fitted = QuadraticPeak(coef[0] / 4, coef[1] / 4, coef[2] / 4, peak);
+  double samples = std::max({std::fabs(rhs[0]), std::fabs(rhs[1]), std::fabs(rhs[2])});
+  if (fitted > 2 * samples) return QuadraticPeak(rhs[0], rhs[1], rhs[2], peak);
+  return fitted;
+}
+
 }  // namespace
 
 TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
@@ -52,8 +92,7 @@ TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
     // quadratic through the edge midpoints (exact for a quadratic patch).
     Vec3 nh = (1.0 / area2) * n;
     double peak[3];
-    dev = QuadraticPeak(Dot(nh, mid[0] - p[0]), Dot(nh, mid[1] - p[0]), Dot(nh, mid[2] - p[0]),
-                        peak);
+    dev = FittedPeak(p, nh, mid, peak);
     m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
     double hc = std::fabs(Dot(nh, cen - p[0]));
     if (hc > dev) dev = hc, m.worst_uv = cen_uv;
@@ -89,7 +128,7 @@ double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3
   double len2 = std::max({Dot(p[1] - p[0], p[1] - p[0]), Dot(p[2] - p[1], p[2] - p[1]),
                           Dot(p[0] - p[2], p[0] - p[2])});
   double area2 = Norm(n);
-  if (!(area2 > 1e-10 * len2)) {
+  if (!(area2 > 1e-6 * len2)) {
     // Degenerate in 3D: only a pole triangle (two corners at one point) is acceptable.
     double shortest = std::min({Dist(p[0], p[1]), Dist(p[1], p[2]), Dist(p[2], p[0])});
     return shortest <= 1e-12 * std::sqrt(len2) ? 1.0 : kInvalid;

@@ -23,6 +23,7 @@ struct TriangleMeasure {
   double rd = 0;          ///< area gain of a split at the centroid: RD estimate
   double max_length = 0;  ///< longest 3D edge
   double violation = 0;   ///< max over criteria of value / limit: <= 1 meets them all
+  double agreement = 1;   ///< TriangleAgreement, when the caller measured it
   Vec2 worst_uv;          ///< where the deviation peaks (a good split point)
 };
 

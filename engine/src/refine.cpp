@@ -15,6 +15,16 @@ namespace {
 // edge than kEdgeWeight splits that edge instead (the paper's Algorithm 3).
 constexpr double kMinWeight = 0.04;
 constexpr double kEdgeWeight = 0.12;
+// A triangle that descends from this many splits and still violates is not split again: a
+// safety net against refinement that makes no progress (sizes shrink ~3x a generation).
+constexpr int kMaxGeneration = 40;
+// The violation given to a folded triangle.
+constexpr double kFoldViolation = 4.0;
+// Below this shape quality (1 = equilateral) a triangle to refine is a sliver.
+constexpr double kSliverQuality = 0.02;
+// A collapse whose triangles exceed the criteria by up to this factor is tried with the
+// survivor moved to its best place.
+constexpr double kCollapseSlack = 2.0;
 
 class Refiner {
  public:
@@ -42,12 +52,26 @@ class Refiner {
       Vec2 uv[3];
       Vec3 p[3], n[3];
       Corners(t, uv, p, n);
-      cand.min_agreement = std::min(cand.min_agreement, TriangleAgreement(uv, p, n));
+      double agreement = TriangleAgreement(uv, p, n);
+      cand.min_agreement = std::min(cand.min_agreement, agreement);
       m_.MeasureCorners(t, uv, p);
       cand.measures.push_back(MeasureTriangle(s_, uv, p, c_));
+      PenaliseFold(&cand.measures.back(), agreement);
       cand.max_violation = std::max(cand.max_violation, cand.measures.back().violation);
     }
     return cand;
+  }
+  // A folded triangle (its normal against the surface's) must be refined whatever it deviates.
+  static void PenaliseFold(TriangleMeasure* m, double agreement) {
+    m->agreement = agreement;
+    if (agreement <= 0) m->violation = std::max(m->violation, kFoldViolation);
+  }
+  // Splits may not fold a child, except that a folded parent may leave children no worse.
+  bool SplitOk(double child_min, const std::vector<int>& parents) const {
+    double parent_min = 1;
+    for (int t : parents) parent_min = std::min(parent_min, measure_[t].agreement);
+    if (parent_min <= 0) return child_min > kInvalid && child_min >= parent_min;
+    return child_min > 0;
   }
   double Agreement(int t) const {
     Vec2 uv[3];
@@ -83,13 +107,23 @@ class Refiner {
     m_.uv.pop_back(), m_.xyz.pop_back(), m_.normal.pop_back(), m_.fixed.pop_back();
     m_.ref.pop_back(), m_.node_tri.pop_back(), m_.pole_axis.pop_back();
   }
+  void ReplaceCavityBack(const std::vector<int>& ids, const std::vector<Tri>& tris,
+                         const Candidate& cand) {
+    Apply(ids, tris, cand);
+  }
   std::vector<int> Apply(const std::vector<int>& cavity, const std::vector<Tri>& tris,
                          const Candidate& cand) {
+    // Generation: how many splits a triangle descends from (flips and collapses keep it).
+    int gen = 0;
+    for (int t : cavity) gen = std::max(gen, static_cast<int>(gen_[t]));
+    if (splitting_) gen = std::min(gen + 1, 255);
     std::vector<int> ids = ReplaceCavity(&m_, cavity, tris);
     if (measure_.size() < m_.tri.size()) {
       measure_.resize(m_.tri.size());
       stamp_.resize(m_.tri.size(), 0);
+      gen_.resize(m_.tri.size(), 0);
     }
+    for (int id : ids) gen_[id] = static_cast<uint8_t>(gen);
     for (size_t k = 0; k < ids.size(); ++k) {
       measure_[ids[k]] = cand.measures[k];
       ++stamp_[ids[k]];
@@ -102,6 +136,15 @@ class Refiner {
   void Push(int t) { queue_.push({measure_[t].violation, t, stamp_[t]}); }
 
   bool RealignPole(int p);
+  struct CollapseChoice {
+    int w = -1;
+    Candidate cand;
+    std::vector<Tri> tris;
+    std::vector<int> cavity;
+  };
+  bool BestCollapse(int v, CollapseChoice* best, double slack = 1.0);
+  bool CollapseAndSmooth(int v, CollapseChoice& choice);
+  bool SmoothNode(int v);
   bool SplitTriangle(int t);
   bool SplitEdge(int t, int i);
   bool TryFlip(int t, int i);
@@ -119,12 +162,16 @@ class Refiner {
   std::vector<TriangleMeasure> measure_;
   std::vector<uint32_t> stamp_;
   bool refining_ = false;
+  bool splitting_ = false;     // Apply() is applying a split
+  std::vector<uint8_t> gen_;   // per triangle: split generation
+  bool sliver_recursion_ = false;
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
 };
 
 Status Refiner::RefineToCriteria(int64_t max_triangles) {
   measure_.resize(m_.tri.size());
   stamp_.assign(m_.tri.size(), 0);
+  gen_.assign(m_.tri.size(), 0);
   refining_ = true;
   for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
     if (!m_.alive[t]) continue;
@@ -132,6 +179,7 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
     Vec3 p[3];
     m_.MeasureCorners(t, uv, p);
     measure_[t] = MeasureTriangle(s_, uv, p, c_);
+    PenaliseFold(&measure_[t], Agreement(t));
     if (measure_[t].violation > 1) Push(t);
   }
   int64_t ops = 0;
@@ -146,7 +194,14 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
       break;
     }
     if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
-    if (SplitTriangle(t)) live = static_cast<int64_t>(m_.tri.size() - m_.free_slots.size());
+    if (gen_[t] >= kMaxGeneration) {
+      stats_.stuck = true;  // refinement makes no progress here: leave it, report it
+      continue;
+    }
+    splitting_ = true;
+    bool split = SplitTriangle(t);
+    splitting_ = false;
+    if (split) live = static_cast<int64_t>(m_.tri.size() - m_.free_slots.size());
   }
   refining_ = false;
   queue_ = {};
@@ -199,6 +254,30 @@ bool Refiner::SplitTriangle(int t) {
     }
     if (m_.kind[t][longest] != EdgeKind::kFixed && SplitEdge(t, longest)) return true;
   }
+  // A sliver (two corners almost together) gains nothing from an interior point: its long edges
+  // carry the deviation, so bisect the longest one (Rivara) when it may be split.
+  {
+    double l2[3], sum = 0;
+    for (int i = 0; i < 3; ++i) l2[i] = Dot(p[(i + 1) % 3] - p[(i + 2) % 3], p[(i + 1) % 3] - p[(i + 2) % 3]), sum += l2[i];
+    double quality = sum > 0 ? 4 * std::sqrt(3.0) * Area(p[0], p[1], p[2]) / sum : 1;
+    int longest = static_cast<int>(std::max_element(l2, l2 + 3) - l2);
+    if (quality < kSliverQuality && m_.pole_axis[tri[0]] + m_.pole_axis[tri[1]] + m_.pole_axis[tri[2]] == -3 &&
+        m_.kind[t][longest] != EdgeKind::kFixed) {
+      if (SplitEdge(t, longest)) return true;
+      // The neighbour across the long edge blocks it (the split would fold it): refine the
+      // neighbour first, then this sliver again.
+      int u = m_.nbr[t][longest];
+      if (u >= 0 && !sliver_recursion_) {
+        sliver_recursion_ = true;
+        bool done = SplitTriangle(u);
+        sliver_recursion_ = false;
+        if (done) {
+          if (m_.alive[t]) Push(t);
+          return true;
+        }
+      }
+    }
+  }
   // The area-optimal interior point (the paper's Algorithm 1), searched in barycentric
   // coordinates from where the deviation peaks.
   auto to_uv = [&](Vec2 b) { return (1 - b.x - b.y) * uv[0] + (b.x * uv[1] + b.y * uv[2]); };
@@ -224,14 +303,25 @@ bool Refiner::SplitTriangle(int t) {
   double w[3] = {1 - b.x - b.y, b.x, b.y};
   int k = static_cast<int>(std::min_element(w, w + 3) - w);
   if (w[k] < kEdgeWeight) {
-    if (m_.kind[t][k] != EdgeKind::kFixed && SplitEdge(t, k)) return true;
+    // Split the nearby edge, unless it is a short one (that would only make slivers).
+    double edge = Dist(p[(k + 1) % 3], p[(k + 2) % 3]);
+    if (m_.kind[t][k] != EdgeKind::kFixed && edge >= 0.3 * mt.max_length && SplitEdge(t, k))
+      return true;
     b = clamp_weights(b, kEdgeWeight);
   }
+  const double longest = mt.max_length;
   for (Vec2 bb : {b, Vec2{1.0 / 3, 1.0 / 3}}) {
     int node = NewNode(to_uv(bb));
+    // A node on top of a corner makes slivers, not progress.
+    bool apart = true;
+    for (int i = 0; i < 3; ++i) apart = apart && Dist(m_.xyz[node], p[i]) > 0.02 * longest;
+    if (!apart) {
+      DropLastNode();
+      continue;
+    }
     std::vector<Tri> tris = SplitTriangleTris(m_, t, node);
     Candidate cand = Evaluate(tris);
-    if (cand.min_agreement > 0) {
+    if (SplitOk(cand.min_agreement, {t})) {
       Apply({t}, tris, cand);
       ++stats_.splits;
       Legalize(node);
@@ -241,7 +331,9 @@ bool Refiner::SplitTriangle(int t) {
   }
   // Neither point keeps the children unfolded: try its edges before giving up on it.
   for (int i = 0; i < 3; ++i)
-    if (m_.kind[t][i] != EdgeKind::kFixed && SplitEdge(t, i)) return true;
+    if (m_.kind[t][i] != EdgeKind::kFixed &&
+        Dist(p[(i + 1) % 3], p[(i + 2) % 3]) >= 0.3 * mt.max_length && SplitEdge(t, i))
+      return true;
   return false;
 }
 
@@ -283,7 +375,7 @@ bool Refiner::SplitEdge(int t, int i) {
   int node = pole ? NewNode(place(s_best), true, b) : NewNode(place(s_best));
   SplitEdgeTris(m_, t, i, node, &cavity, &tris);
   Candidate cand = Evaluate(tris);
-  if (!(cand.min_agreement > 0)) {
+  if (!SplitOk(cand.min_agreement, cavity)) {
     DropLastNode();
     return false;
   }
@@ -336,41 +428,110 @@ void Refiner::Legalize(int node) {
   }
 }
 
-int Refiner::CollapsePass() {
-  int count = 0;
-  const int n = m_.node_count();
-  for (int v = 0; v < n; ++v) {
-    if (m_.fixed[v] || m_.node_tri[v] < 0) continue;
-    std::vector<int> nv = m_.Neighbours(v);
-    std::vector<int> cavity = m_.Ring(v);
-    if (nv.size() != cavity.size()) continue;  // not a closed fan
-    double old_agree = MinAgreement(cavity);
-    int best_w = -1;
-    Candidate best;
-    std::vector<Tri> best_tris;
-    for (int w : nv) {
-      // Link condition: v and w share exactly the two apexes of the triangles on edge v-w.
-      std::vector<int> nw = m_.Neighbours(w);
-      int common = 0;
-      for (int x : nv) common += std::find(nw.begin(), nw.end(), x) != nw.end();
-      if (common != 2) continue;
-      std::vector<int> cav;
-      std::vector<Tri> tris;
-      CollapseTris(m_, v, w, &cav, &tris);
-      bool oriented = true;
-      for (const Tri& nt : tris)
-        oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
-      if (!oriented) continue;
-      Candidate cand = Evaluate(tris);
-      if (cand.max_violation > 1 || !AgreementOk(cand.min_agreement, old_agree)) continue;
-      if (best_w < 0 || cand.max_violation < best.max_violation) {
-        best_w = w, best = std::move(cand), best_tris = std::move(tris);
-      }
+bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
+  best->w = -1;
+  if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
+  std::vector<int> nv = m_.Neighbours(v);
+  std::vector<int> cavity = m_.Ring(v);
+  if (nv.size() != cavity.size()) return false;  // not a closed fan
+  double old_agree = MinAgreement(cavity);
+  for (int w : nv) {
+    // Link condition: v and w share exactly the two apexes of the triangles on edge v-w.
+    std::vector<int> nw = m_.Neighbours(w);
+    int common = 0;
+    for (int x : nv) common += std::find(nw.begin(), nw.end(), x) != nw.end();
+    if (common != 2) continue;
+    std::vector<int> cav;
+    std::vector<Tri> tris;
+    CollapseTris(m_, v, w, &cav, &tris);
+    bool oriented = true;
+    for (const Tri& nt : tris)
+      oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
+    if (!oriented) continue;
+    Candidate cand = Evaluate(tris);
+    if (cand.max_violation > slack || !AgreementOk(cand.min_agreement, old_agree)) continue;
+    if (best->w < 0 || cand.max_violation < best->cand.max_violation) {
+      best->w = w, best->cand = std::move(cand), best->tris = std::move(tris);
+      best->cavity = cavity;
     }
-    if (best_w < 0) continue;
-    Apply(cavity, best_tris, best);
-    m_.node_tri[v] = -1;
+  }
+  return best->w >= 0;
+}
+
+// Collapses v into choice.w, then moves w to lower the largest violation around it. Keeps the
+// result only when every triangle around w meets the criteria; otherwise restores the mesh.
+bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
+  const int w = choice.w;
+  std::vector<Tri> old_tris;
+  std::vector<TriangleMeasure> old_measures;
+  for (int t : choice.cavity) old_tris.push_back(m_.tri[t]), old_measures.push_back(measure_[t]);
+  std::vector<int> ids = Apply(choice.cavity, choice.tris, choice.cand);
+  m_.node_tri[v] = -1;
+  if (choice.cand.max_violation <= 1.0) {
+    if (!m_.fixed[w]) SmoothNode(w);
+    return true;
+  }
+  // Move w, then its free neighbours, then w again; keep it when everything around meets the
+  // criteria.
+  std::vector<int> movers = {w};
+  for (int x : m_.Neighbours(w))
+    if (!m_.fixed[x]) movers.push_back(x);
+  if (!m_.fixed[w]) movers.push_back(w);
+  std::vector<int> region;
+  for (int x : movers)
+    for (int t : m_.Ring(x))
+      if (std::find(region.begin(), region.end(), t) == region.end()) region.push_back(t);
+  std::vector<TriangleMeasure> region_measures;
+  for (int t : region) region_measures.push_back(measure_[t]);
+  std::vector<std::array<Vec3, 2>> saved_xyz;
+  std::vector<Vec2> saved_uv;
+  for (int x : movers) saved_uv.push_back(m_.uv[x]), saved_xyz.push_back({m_.xyz[x], m_.normal[x]});
+  for (int x : movers)
+    if (!m_.fixed[x]) SmoothNode(x);
+  if (MaxViolation(region) <= 1.0) return true;
+  for (int k = static_cast<int>(movers.size()) - 1; k >= 0; --k) {
+    int x = movers[k];
+    m_.uv[x] = saved_uv[k], m_.xyz[x] = saved_xyz[k][0], m_.normal[x] = saved_xyz[k][1];
+  }
+  for (size_t k = 0; k < region.size(); ++k) measure_[region[k]] = region_measures[k];
+  Candidate back;
+  back.measures = old_measures;
+  ReplaceCavityBack(ids, old_tris, back);
+  return false;
+}
+
+int Refiner::CollapsePass() {
+  // Least damage first: a queue of each node's best collapse keyed by the largest violation it
+  // leaves; after a collapse the survivor is smoothed and its neighbours are re-queued.
+  int count = 0;
+  std::vector<uint32_t> node_stamp(m_.node_count(), 0);
+  using Entry = std::tuple<double, int, uint32_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  CollapseChoice choice;
+  for (int v = 0; v < m_.node_count(); ++v)
+    if (BestCollapse(v, &choice, kCollapseSlack)) queue.push({choice.cand.max_violation, v, 0});
+  int64_t ops = 0;
+  while (!queue.empty()) {
+    auto [cost, v, stamp] = queue.top();
+    queue.pop();
+    if (stamp != node_stamp[v] || m_.node_tri[v] < 0) continue;
+    if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) break;
+    if (!BestCollapse(v, &choice, kCollapseSlack)) continue;
+    if (choice.cand.max_violation > cost * (1 + 1e-9) + 1e-12) {
+      queue.push({choice.cand.max_violation, v, ++node_stamp[v]});
+      continue;
+    }
+    if (!CollapseAndSmooth(v, choice)) continue;
     ++count;
+    int w = choice.w;
+    std::vector<int> around = m_.Neighbours(w);
+    around.push_back(w);
+    for (int x : around) {
+      if (m_.fixed[x]) continue;
+      ++node_stamp[x];
+      if (BestCollapse(x, &choice, kCollapseSlack))
+        queue.push({choice.cand.max_violation, x, node_stamp[x]});
+    }
   }
   stats_.collapses += count;
   return count;
@@ -389,53 +550,53 @@ int Refiner::FlipPass() {
   return count;
 }
 
+bool Refiner::SmoothNode(int v) {
+  if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
+  std::vector<int> ring = m_.Ring(v);
+  std::vector<int> nv = m_.Neighbours(v);
+  if (nv.size() != ring.size()) return false;
+  std::vector<Tri> tris;
+  for (int t : ring) tris.push_back(m_.tri[t]);
+  const double old_score = MaxViolation(ring);
+  const double old_agree = MinAgreement(ring);
+  const Vec2 uv0 = m_.uv[v];
+  const Vec3 x0 = m_.xyz[v], n0 = m_.normal[v];
+  double r = 0;
+  for (int w : nv) {
+    Vec2 d = m_.uv[w] - uv0;
+    r += std::hypot(d.x * su_, d.y * sv_);
+  }
+  r /= nv.size();
+  auto objective = [&](Vec2 q) {
+    m_.uv[v] = q;
+    m_.xyz[v] = s_.Point(q.x, q.y);
+    m_.normal[v] = s_.Normal(q.x, q.y);
+    for (const Tri& nt : tris)
+      if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
+    Candidate cand = Evaluate(tris);
+    if (!AgreementOk(cand.min_agreement, old_agree)) return -HUGE_VAL;
+    return -cand.max_violation;
+  };
+  PatternSearchResult res = CrossPatternSearch(
+      objective, [](Vec2) { return true; }, uv0, -old_score, {0.2 * r / su_, 0.2 * r / sv_}, 0.1,
+      24);
+  if (!(res.value > -old_score * (1 - 1e-6))) {
+    m_.uv[v] = uv0, m_.xyz[v] = x0, m_.normal[v] = n0;
+    return false;
+  }
+  objective(res.x);  // leave v at the optimum
+  Candidate cand = Evaluate(tris);
+  for (size_t k = 0; k < ring.size(); ++k) {
+    measure_[ring[k]] = cand.measures[k];
+    ++stamp_[ring[k]];
+  }
+  ++stats_.moves;
+  return true;
+}
+
 int Refiner::SmoothPass() {
   int count = 0;
-  const int n = m_.node_count();
-  for (int v = 0; v < n; ++v) {
-    if (m_.fixed[v] || m_.node_tri[v] < 0) continue;
-    std::vector<int> ring = m_.Ring(v);
-    std::vector<int> nv = m_.Neighbours(v);
-    if (nv.size() != ring.size()) continue;
-    std::vector<Tri> tris;
-    for (int t : ring) tris.push_back(m_.tri[t]);
-    const double old_score = MaxViolation(ring);
-    const double old_agree = MinAgreement(ring);
-    const Vec2 uv0 = m_.uv[v];
-    const Vec3 x0 = m_.xyz[v], n0 = m_.normal[v];
-    double r = 0;
-    for (int w : nv) {
-      Vec2 d = m_.uv[w] - uv0;
-      r += std::hypot(d.x * su_, d.y * sv_);
-    }
-    r /= nv.size();
-    Candidate best_cand;
-    auto objective = [&](Vec2 q) {
-      m_.uv[v] = q;
-      m_.xyz[v] = s_.Point(q.x, q.y);
-      m_.normal[v] = s_.Normal(q.x, q.y);
-      for (const Tri& nt : tris)
-        if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
-      Candidate cand = Evaluate(tris);
-      if (!AgreementOk(cand.min_agreement, old_agree)) return -HUGE_VAL;
-      return -cand.max_violation;
-    };
-    PatternSearchResult res = CrossPatternSearch(
-        objective, [](Vec2) { return true; }, uv0, -old_score, {0.2 * r / su_, 0.2 * r / sv_},
-        0.1, 24);
-    if (res.value > -old_score * (1 - 1e-6) || !(res.value > -HUGE_VAL)) {
-      m_.uv[v] = uv0, m_.xyz[v] = x0, m_.normal[v] = n0;
-      continue;
-    }
-    objective(res.x);  // leave v at the optimum
-    Candidate cand = Evaluate(tris);
-    for (size_t k = 0; k < ring.size(); ++k) {
-      measure_[ring[k]] = cand.measures[k];
-      ++stamp_[ring[k]];
-    }
-    ++count;
-  }
-  stats_.moves += count;
+  for (int v = 0; v < m_.node_count(); ++v) count += SmoothNode(v);
   return count;
 }
 
