@@ -237,3 +237,26 @@ def test_timeout(run, data_dir, tmp_path):
     assert "timed out" in result.stderr
     assert result.json["error"]["code"] == "deadline_exceeded"
     assert not (tmp_path / "out.msh").exists()
+
+
+def test_instanced_assembly(run, shared_dir, tmp_path, gltf_validate):
+    """An assembly that places one part several times: glTF stores the part's mesh once and
+    draws it per instance; every format holds as many triangles as the run reports."""
+    model = shared_dir / "corpus" / "gmsh_presse_asm.step"
+    assert model.is_file(), model
+    info = run("info", model, "--json").json
+    assert info["unique_faces"] < info["faces"]
+    assert info["instances"] >= 2
+    for extension in (".glb", ".obj", ".msh"):
+        output = tmp_path / ("assembly" + extension)
+        result = run("mesh", model, "-o", output, "--json", "--timeout", "300")
+        assert result.code == 0, result.stderr
+        if extension == ".glb":
+            validation = gltf_validate(output)
+            assert validation["errors"] == 0, validation["messages"]
+            count = validation["triangles"]
+        elif extension == ".obj":
+            count, _ = meshio_triangles(output)
+        else:
+            count, surfaces = gmsh_triangles(output)
+        assert count == result.json["triangles"]
