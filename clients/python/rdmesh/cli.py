@@ -34,6 +34,17 @@ def write_mesh(path, result):
     meshio.write(path, mesh, **kwargs)
 
 
+def open_edges(triangles):
+    """Edges used by one triangle only: 0 for a watertight mesh of closed solids."""
+    t = np.asarray(triangles, dtype=np.int64)
+    if not len(t):
+        return 0
+    a = np.concatenate([t[:, 0], t[:, 1], t[:, 2]])
+    b = np.concatenate([t[:, 1], t[:, 2], t[:, 0]])
+    keys = np.minimum(a, b) * (int(t.max()) + 1) + np.maximum(a, b)
+    return int((np.unique(keys, return_counts=True)[1] == 1).sum())
+
+
 def _token(args):
     if args.token_file:
         with open(args.token_file) as file:
@@ -116,6 +127,7 @@ def cmd_mesh(args):
         "model": result.model.name, "model_id": result.model.model_id,
         "faces": result.model.faces, "faces_ok": s.faces_ok, "faces_failed": s.faces_failed,
         "triangles": int(len(result.triangles)), "nodes": int(len(result.xyz)),
+        "open_edges": open_edges(result.triangles),
         "requested_deviation": s.requested_deviation,
         "estimated_deviation": s.estimated_deviation,
         "mesh_area": s.mesh_area, "exact_area": s.exact_area,
@@ -125,9 +137,9 @@ def cmd_mesh(args):
     if args.json:
         print(json.dumps(summary))
     else:
-        print("%s: %d faces (%d ok, %d failed), %d triangles, %d nodes"
+        print("%s: %d faces (%d ok, %d failed), %d triangles, %d nodes, %d open edges"
               % (summary["model"], summary["faces"], s.faces_ok, s.faces_failed,
-                 summary["triangles"], summary["nodes"]))
+                 summary["triangles"], summary["nodes"], summary["open_edges"]))
         print("deviation %.4g (asked %.4g), area %.6g of %.6g; %.2f s (server %.2f s) -> %s"
               % (s.estimated_deviation, s.requested_deviation, s.mesh_area, s.exact_area,
                  seconds, s.total_seconds, summary["output"]))
