@@ -357,6 +357,13 @@ def test_rdmesh_py_health_info_and_status(daemon):
     assert json.loads(info.stdout)["faces"] == 9
     status = run("status")
     assert status.returncode == 0 and json.loads(status.stdout)["max_jobs"] == 2
+    out = daemon.log_path.parent / "cube.stl"
+    meshed = run("mesh", str(CUBE), "-o", str(out), "--json", "--no-progress")
+    assert meshed.returncode == 0, meshed.stderr
+    summary = json.loads(meshed.stdout)
+    assert summary["triangles"] > 0 and summary["open_edges"] == 0
+    assert summary["faces_ok"] == summary["faces"] == 9
+    assert out.stat().st_size == 84 + 50 * summary["triangles"]  # binary STL
     bad = run("info", str(DATA / "SOURCES.md"))
     assert bad.returncode == 1 and "INVALID_ARGUMENT" in bad.stderr
     down = subprocess.run(["/usr/bin/python3", str(RDMESH_PY), "--address", "127.0.0.1:1",

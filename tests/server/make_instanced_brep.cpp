@@ -9,12 +9,11 @@
 #include <BRep_Builder.hxx>
 #include <TopLoc_Location.hxx>
 #include <TopoDS_Compound.hxx>
-#include <gp_Trsf.hxx>
-#include <gp_Vec.hxx>
-
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <gp_Trsf.hxx>
+#include <gp_Vec.hxx>
 
 int main(int argc, char** argv) {
   if (argc < 3) {
@@ -32,7 +31,7 @@ int main(int argc, char** argv) {
   for (int i = 0; i < copies; ++i) {
     gp_Trsf placement;
     placement.SetTranslation(gp_Vec(1.5 * size * (i % side), 1.5 * size * ((i / side) % side),
-                                     1.5 * size * (i / (side * side))));
+                                    1.5 * size * (i / (side * side))));
     builder.Add(compound, box.Moved(TopLoc_Location(placement)));
   }
   return BRepTools::Write(compound, argv[1]) ? 0 : 1;
