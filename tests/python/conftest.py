@@ -15,6 +15,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
@@ -141,6 +142,54 @@ def daemon(tmp_path_factory):
 @pytest.fixture
 def client(daemon):
     return daemon.client()
+
+
+# Workloads that keep the engine busy, lightest first. How long each takes depends on the engine
+# of the day, so the suite picks the first that still runs after HEAVY_SECONDS (see `heavy`).
+HEAVY_CANDIDATES = [
+    (CUBE, {"max_edge_length": 0.2}),
+    (CYLINDER, {"max_edge_length": 2.0}),
+    (CUBE, {"max_edge_length": 0.1}),
+    (NIST, {}),
+    (CYLINDER, {"max_edge_length": 0.5}),
+    (CUBE, {"max_edge_length": 0.02}),
+]
+HEAVY_SECONDS = 4.0
+
+
+@pytest.fixture(scope="session")
+def heavy(tmp_path_factory):
+    """(model, options) of a Mesh job that runs for more than HEAVY_SECONDS on this engine; the
+    tests cancel it (or let a deadline stop it) long before it ends."""
+    import grpc
+    d = Daemon(tmp_path_factory.mktemp("calibrate") / "rdmeshd.log")
+    try:
+        d.wait_serving()
+        client = d.client()
+        for model, options in HEAVY_CANDIDATES:
+            call = client.mesh_stream(model, **options)
+            finished = threading.Event()
+
+            def drain(call=call, finished=finished):
+                try:
+                    for _ in call:
+                        pass
+                except grpc.RpcError:
+                    pass
+                finished.set()
+
+            thread = threading.Thread(target=drain)
+            thread.start()
+            still_running = not finished.wait(HEAVY_SECONDS)
+            call.cancel()
+            thread.join()
+            wait_until(lambda: client.server_status().active_jobs == 0, 5.0)
+            if still_running:
+                return model, options
+        pytest.fail("no workload in HEAVY_CANDIDATES keeps this engine busy for %.0f s"
+                    % HEAVY_SECONDS)
+    finally:
+        d.stop()
 
 
 def wait_until(predicate, timeout, interval=0.02):

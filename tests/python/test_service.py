@@ -214,11 +214,11 @@ def test_results_over_max_triangles_are_resource_exhausted(start_daemon):
     assert wait_until(lambda: client.server_status().active_jobs == 0, 1.0) is not None
 
 
-def test_full_job_queue_is_resource_exhausted(start_daemon):
+def test_full_job_queue_is_resource_exhausted(start_daemon, heavy):
     d = start_daemon("--max-jobs", "1", "--max-queue", "0")
     client = d.client()
-    model = client.upload(CUBE)
-    long_call = client.mesh_stream(model, max_edge_length=0.05)
+    model = client.upload(heavy[0])
+    long_call = client.mesh_stream(model, **heavy[1])
     next(long_call)  # Started: the job holds the only slot
     with pytest.raises(RdmeshError) as error:
         client.mesh(model)
@@ -226,7 +226,8 @@ def test_full_job_queue_is_resource_exhausted(start_daemon):
     assert "queue is full" in error.value.details
     long_call.cancel()
     assert wait_until(lambda: client.server_status().active_jobs == 0, 1.0) is not None
-    assert wait_until(lambda: _mesh_ok(client, model), 5.0) is not None
+    cube = client.upload(CUBE)
+    assert wait_until(lambda: _mesh_ok(client, cube), 5.0) is not None
 
 
 def _mesh_ok(client, model):
@@ -304,12 +305,12 @@ def test_text_log_lines_carry_request_ids(daemon, client):
     assert lines and all(" req=" in line for line in lines)
 
 
-def test_graceful_shutdown(tmp_path):
+def test_graceful_shutdown(tmp_path, heavy):
     d = Daemon(tmp_path / "shutdown.log", ["--grace-seconds", "1"])
     d.wait_serving()
     client = d.client()
-    model = client.upload(CUBE)
-    long_call = client.mesh_stream(model, max_edge_length=0.05)
+    model = client.upload(heavy[0])
+    long_call = client.mesh_stream(model, **heavy[1])
     next(long_call)
     outcome = {}
 
