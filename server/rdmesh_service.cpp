@@ -72,8 +72,7 @@ grpc::Status RdmeshService::Authorize(grpc::ServerContext* context, const Reques
     return grpc::Status::OK;
   }
   log.Warn("refused: missing or wrong bearer token");
-  return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
-                      "this server needs an 'authorization: Bearer <token>' header");
+  return Unauthenticated("this server needs an 'authorization: Bearer <token>' header");
 }
 
 pb::ModelInfo RdmeshService::Describe(const CachedModel& entry, bool cached) const {
@@ -167,31 +166,33 @@ grpc::Status RdmeshService::UploadModel(grpc::ServerContext* context,
       name = chunk.name();
       format = FromProto(chunk.format());
       if (chunk.total_bytes() > config_.max_model_bytes) {
-        return Finish(log,
-                      grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                   "the model is " + std::to_string(chunk.total_bytes()) +
-                                       " bytes, more than the server's --max-model-bytes of " +
-                                       std::to_string(config_.max_model_bytes)),
-                      start);
+        return Finish(
+            log,
+            ToGrpcStatus(Status(StatusCode::kResourceExhausted,
+                                "the model is " + std::to_string(chunk.total_bytes()) +
+                                    " bytes, more than the server's --max-model-bytes of " +
+                                    std::to_string(config_.max_model_bytes))),
+            start);
       }
       if (chunk.total_bytes() > 0) bytes.reserve(chunk.total_bytes());
       first = false;
     }
     if (bytes.size() + chunk.data().size() > config_.max_model_bytes) {
       return Finish(log,
-                    grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                 "the model passes the server's --max-model-bytes of " +
-                                     std::to_string(config_.max_model_bytes) + " bytes"),
+                    ToGrpcStatus(Status(StatusCode::kResourceExhausted,
+                                        "the model passes the server's --max-model-bytes of " +
+                                            std::to_string(config_.max_model_bytes) + " bytes")),
                     start);
     }
     bytes += chunk.data();
   }
   if (context->IsCancelled()) {
-    return Finish(log, grpc::Status(grpc::StatusCode::CANCELLED, "upload cancelled"), start);
+    return Finish(log, ToGrpcStatus(Status(StatusCode::kCancelled, "upload cancelled")), start);
   }
   if (bytes.empty()) {
-    return Finish(
-        log, grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "the upload holds no bytes"), start);
+    return Finish(log,
+                  ToGrpcStatus(Status(StatusCode::kInvalidArgument, "the upload holds no bytes")),
+                  start);
   }
   if (name.empty()) name = "upload";
   bool cached = false;
@@ -226,8 +227,7 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
   const RequestLog log = StartRequest(context, "Mesh");
   if (grpc::Status auth = Authorize(context, log); !auth.ok()) return auth;
   if (shutting_down_) {
-    return Finish(log, grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down"),
-                  start);
+    return Finish(log, Unavailable("the server is shutting down"), start);
   }
 
   Result<MeshOptions> options = FromProto(request->options());
@@ -237,10 +237,10 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
   }
   if (config_.max_triangles > 0 && options->max_triangles > config_.max_triangles) {
     return Finish(log,
-                  grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                               "max_triangles " + std::to_string(options->max_triangles) +
-                                   " is more than the server's limit of " +
-                                   std::to_string(config_.max_triangles)),
+                  ToGrpcStatus(Status(StatusCode::kInvalidArgument,
+                                      "max_triangles " + std::to_string(options->max_triangles) +
+                                          " is more than the server's limit of " +
+                                          std::to_string(config_.max_triangles))),
                   start);
   }
   options->threads =
@@ -252,11 +252,12 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
   const CachedModel& model = **entry;
   for (int id : options->face_ids) {
     if (id > model.info.faces) {
-      return Finish(log,
-                    grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                                 "face id " + std::to_string(id) + " is out of range: the model " +
-                                     "has faces 1.." + std::to_string(model.info.faces)),
-                    start);
+      return Finish(
+          log,
+          ToGrpcStatus(Status(StatusCode::kInvalidArgument,
+                              "face id " + std::to_string(id) + " is out of range: the model " +
+                                  "has faces 1.." + std::to_string(model.info.faces))),
+          start);
     }
   }
 
@@ -265,18 +266,18 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
     case JobLimiter::Admission::kAdmitted:
       break;
     case JobLimiter::Admission::kQueueFull:
-      return Finish(log,
-                    grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                 "the job queue is full (" + std::to_string(limiter_.max_jobs()) +
-                                     " running, " + std::to_string(limiter_.max_queue()) +
-                                     " waiting); retry later"),
-                    start);
+      return Finish(
+          log,
+          ToGrpcStatus(Status(StatusCode::kResourceExhausted,
+                              "the job queue is full (" + std::to_string(limiter_.max_jobs()) +
+                                  " running, " + std::to_string(limiter_.max_queue()) +
+                                  " waiting); retry later")),
+          start);
     case JobLimiter::Admission::kStopped:
-      return Finish(log, grpc::Status(grpc::StatusCode::CANCELLED, "cancelled while queued"),
+      return Finish(log, ToGrpcStatus(Status(StatusCode::kCancelled, "cancelled while queued")),
                     start);
     case JobLimiter::Admission::kClosed:
-      return Finish(log, grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down"),
-                    start);
+      return Finish(log, Unavailable("the server is shutting down"), start);
   }
   JobSlot slot(&limiter_);
   struct CountCompleted {
@@ -302,7 +303,7 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
            started->faces_requested(), options->threads, options->max_deviation,
            resolved->max_deviation_abs(), options->rd_tolerance, options->max_triangles);
   if (!writer->Write(started_event)) {
-    return Finish(log, grpc::Status(grpc::StatusCode::CANCELLED, "client went away"), start);
+    return Finish(log, ToGrpcStatus(Status(StatusCode::kCancelled, "client went away")), start);
   }
 
   MeshJob::Params params;

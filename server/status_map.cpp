@@ -71,4 +71,12 @@ Status FromGrpcStatus(const grpc::Status& status) {
   return Status(FromGrpcCode(status.error_code()), status.error_message());
 }
 
+grpc::Status Unauthenticated(const std::string& message) {
+  return grpc::Status(grpc::StatusCode::UNAUTHENTICATED, message);
+}
+
+grpc::Status Unavailable(const std::string& message) {
+  return grpc::Status(grpc::StatusCode::UNAVAILABLE, message);
+}
+
 }  // namespace rdmesh::server

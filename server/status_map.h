@@ -3,6 +3,8 @@
 
 #include <grpcpp/support/status.h>
 
+#include <string>
+
 #include "rdmesh/status.h"
 
 namespace rdmesh::server {
@@ -21,5 +23,10 @@ grpc::Status ToGrpcStatus(const Status& status);
 
 /// An engine status from a gRPC one (message kept).
 Status FromGrpcStatus(const grpc::Status& status);
+
+/// The two answers of the service that no engine error stands for: a missing or wrong bearer
+/// token (UNAUTHENTICATED) and a server that is shutting down (UNAVAILABLE).
+grpc::Status Unauthenticated(const std::string& message);
+grpc::Status Unavailable(const std::string& message);
 
 }  // namespace rdmesh::server

@@ -58,5 +58,11 @@ TEST(StatusMapTest, KeepsTheMessage) {
   EXPECT_TRUE(FromGrpcStatus(grpc::Status::OK).ok());
 }
 
+TEST(StatusMapTest, ServiceOnlyAnswers) {
+  EXPECT_EQ(Unauthenticated("no token").error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(Unavailable("shutting down").error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_EQ(Unavailable("shutting down").error_message(), "shutting down");
+}
+
 }  // namespace
 }  // namespace rdmesh::server
