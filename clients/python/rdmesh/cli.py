@@ -105,7 +105,8 @@ def cmd_mesh(args):
     progress = None
     if not args.no_progress:
         from tqdm import tqdm
-        bar = tqdm(total=0, unit="face", desc="meshing", leave=False, file=sys.stderr)
+        bar = tqdm(total=0, unit="face", desc="meshing", leave=False, file=sys.stderr,
+                   disable=None)  # None: only on a terminal
 
         def progress(p):
             if p.stage != "faces" or p.total <= 0:
