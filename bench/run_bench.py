@@ -1,0 +1,638 @@
+#!/usr/bin/python3
+"""rdmesh benchmark: triangles and seconds to reach a max deviation, against BRepMesh and Gmsh.
+
+  /usr/bin/python3 bench/run_bench.py [--quick] [--models NAME ...] [--out bench/RESULTS.md]
+
+For each model and mesher a ladder of settings is run and every mesh is scored by the independent
+yardstick (/work/shared/yardstick/meshbench eval). Along each mesher's Pareto front of
+(triangles, hausdorff_rel) the triangles and seconds needed for a max deviation of 1e-3 and 1e-4 of
+the bbox diagonal are interpolated log-log; the report gives them per model, the ratios
+rdmesh/BRepMesh and rdmesh/Gmsh, their geometric means, and the failures seen (faces left
+uncovered, free edges on closed models, inverted triangles, errors, timeouts). See bench/README.md.
+
+Meshers:
+  rdmesh    the CLI (build-bench/bin/rdmesh), --max-deviation-rel ladder, --threads N
+  brepmesh  bench/brepmesh_runner (OCCT BRepMesh linked), absolute deflection ladder x angles
+  gmsh      Debian's python3-gmsh through the yardstick's anchors.py (curvature sizing ladder)
+Anchor records (brepmesh, gmsh) are cached in BUILD/bench_cache.jsonl; rdmesh records too, keyed
+by the binary's hash, so a rerun with an unchanged rdmesh only re-scores nothing.
+"""
+import argparse, datetime, hashlib, json, math, os, platform, shlex, shutil, subprocess, sys, tempfile, time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(HERE)
+YARD = "/work/shared/yardstick"
+MESHBENCH = os.path.join(YARD, "meshbench")
+ANCHORS = os.path.join(YARD, "anchors.py")
+CORPUS = "/work/shared/corpus"
+PYTHON = "/usr/bin/python3"
+TARGETS = [1e-3, 1e-4]
+TRIANGLE_CAP = 1_500_000  # finer settings of a ladder are skipped past this many triangles
+
+# ~6 small models, a few minutes in all.
+QUICK = ["cq_red_cube_blue_cylinder.step", "axom_sliced_cylinder.step", "gmsh_cube_filet.stp",
+         "pyoccdemos_face_recognition_sample_part.stp", "nist_mbe_pmi_11.stp", "gmsh_kurbelwelle.stp"]
+# A representative default set: analytic and B-spline, machined parts, freeform, assemblies,
+# periodic surfaces, torus fillets. The giant files (>1 MB, several hundred to 2700 faces:
+# gmsh_tough_second_order, nist_ctc_02, voron_bowden_module, pyoccdemos_ventilator, nist_mbe_pmi_2/4,
+# pyoccdemos_11752, gmsh_u_joint_2, gmsh_block, cadex_omni_wheel, ...) are left out for time.
+DEFAULT = QUICK + ["gmsh_part.step", "gmsh_angled.step", "gmsh_periodic_u_cst.step", "gmsh_mambo_s34.step",
+                   "gmsh_wrenchnut.stp", "gmsh_zylkopf.stp", "gmsh_solid_56.step", "gmsh_918_pump_carter_sup.stp",
+                   "gmsh_component4.step", "brepnet_132907_4ed3eae8_0.stp", "brepnet_52890_dc92327c_3.stp",
+                   "nist_mbe_pmi_1.stp", "pyocc_eight_cyl.stp"]
+# Analytic models with a known minimum (always run unless --no-analytic).
+ANALYTIC = {
+    "sphere.step": "unit sphere",
+    "cylinder.step": "cylinder r=1 h=4",
+}
+
+
+def theoretical_minimum(model, eps):
+    """Fewest triangles for max deviation eps * diag (see bench/README.md)."""
+    if model == "sphere.step":
+        # Unit sphere: ~1396 triangles at 1e-3 of the diagonal (2*sqrt(3)); the count of a
+        # near-optimal mesh scales as 1/deviation.
+        return 1396.0 * (1e-3 / eps)
+    if model == "cylinder.step":
+        # r=1, h=4, diag=sqrt(24): n segments per circle with sagitta 1-cos(pi/n) <= eps*diag; the
+        # side needs 2n triangles (straight generators are exact), each cap disc n-2.
+        d = eps * math.sqrt(24.0)
+        n = math.ceil(math.pi / math.acos(1.0 - d))
+        return float(2 * n + 2 * (n - 2))
+    return None
+
+
+def log(*a):
+    print(*a, file=sys.stderr, flush=True)
+
+
+def last_json(text):
+    for line in reversed(text.strip().splitlines()):
+        line = line.strip()
+        if line.startswith("{"):
+            try:
+                return json.loads(line)
+            except ValueError:
+                continue
+    return None
+
+
+def sha256(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()[:16]
+
+
+def run(cmd, timeout):
+    """(stdout, stderr, returncode or 'timeout', wall seconds)."""
+    t0 = time.perf_counter()
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        return p.stdout, p.stderr, p.returncode, time.perf_counter() - t0
+    except subprocess.TimeoutExpired as e:
+        out = e.stdout.decode() if isinstance(e.stdout, bytes) else (e.stdout or "")
+        return out, "", "timeout", time.perf_counter() - t0
+
+
+# ---------------------------------------------------------------------------------------------
+# Ladders. Each yields (group, label, make_cmd(step, out) -> argv, extra record fields).
+
+def rdmesh_ladder(a, diag):
+    for tol in [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5]:
+        def cmd(step, out, tol=tol):
+            return [a.rdmesh, "mesh", step, "-o", out, "--max-deviation-rel", repr(tol), "--json", "--quiet",
+                    "--threads", str(a.threads), "--timeout", str(a.timeout)]
+        yield "all", f"tol={tol:g}", cmd, {"tol": tol}
+
+
+def brepmesh_ladder(a, diag):
+    # Absolute deflection r * diag. BRepMesh's deviation is not monotonic in the deflection and its
+    # angle bound adds triangles that no deviation needs, so the ladder is dense near the targets
+    # and spans three angles; the best front over all of them is taken.
+    rs = [1e-2, 5e-3, 2e-3, 1.4e-3, 1.2e-3, 1e-3, 8.5e-4, 7e-4, 4e-4, 2e-4, 1.4e-4, 1e-4, 8.5e-5,
+          7e-5, 5e-5, 3.5e-5, 2.5e-5]
+    for ang in [0.5, 1.0, 2.0]:
+        for r in rs:
+            def cmd(step, out, r=r, ang=ang):
+                return [a.brepmesh_runner, step, repr(r * diag), str(ang), out]
+            yield f"ang={ang}", f"abs={r:g},ang={ang}", cmd, {"deflection_rel": r, "angle": ang}
+
+
+def gmsh_ladder(a, diag):
+    # Mesh.MeshSizeFromCurvature = n elements per 2*pi of curvature, 2 threads (anchors.py).
+    for n in [8, 14, 24, 40, 70, 120]:
+        def cmd(step, out, n=n):
+            return [PYTHON, ANCHORS, "gmsh", step, out, str(n)]
+        yield "all", f"n={n}", cmd, {"n_per_2pi": n}
+
+
+LADDERS = {"rdmesh": rdmesh_ladder, "brepmesh": brepmesh_ladder, "gmsh": gmsh_ladder}
+LABELS = {"rdmesh": "rdmesh", "brepmesh": "BRepMesh", "gmsh": "Gmsh"}
+
+
+# ---------------------------------------------------------------------------------------------
+# Pareto front and interpolation (the method of /work/shared/yardstick/sweep.py).
+
+def valid(r):
+    """A mesh leaving more than 1% of the faces uncovered is no comparable result."""
+    return "error" not in r and r.get("faces_covered", 0) >= 0.99 * r.get("faces", 1)
+
+
+def pareto(points):
+    """Points no other point beats on both triangles and deviation, by increasing triangles."""
+    out, best = [], math.inf
+    for p in sorted(points, key=lambda p: (p["triangles"], p["hausdorff_rel"])):
+        if p["hausdorff_rel"] < best:
+            best = p["hausdorff_rel"]
+            out.append(p)
+    return out
+
+
+def interpolate(front, eps, key):
+    """key (triangles or seconds) where the front crosses deviation eps, log-log between the two
+    neighbouring points; the coarsest point when it already meets eps; None if never reached."""
+    if not front:
+        return None
+    if front[0]["hausdorff_rel"] <= eps:
+        return front[0][key]
+    for p, q in zip(front, front[1:]):
+        hp, hq = p["hausdorff_rel"], q["hausdorff_rel"]
+        if hp >= eps >= hq and hp > hq:
+            s = math.log(eps / hp) / math.log(hq / hp)
+            vp, vq = max(p[key], 1e-6), max(q[key], 1e-6)
+            return vp * (vq / vp) ** s
+    return None
+
+
+# ---------------------------------------------------------------------------------------------
+
+class Cache:
+    def __init__(self, path):
+        self.path, self.records, self.scores = path, {}, {}
+        if path and os.path.exists(path):
+            for line in open(path):
+                try:
+                    r = json.loads(line)
+                    self.records[r["key"]] = r
+                    if "msh_sha" in r and "hausdorff_rel" in r:
+                        self.scores[(r["model"], r["msh_sha"])] = r
+                except (ValueError, KeyError):
+                    pass
+
+    def get(self, key):
+        return self.records.get(key)
+
+    def put(self, rec):
+        self.records[rec["key"]] = rec
+        if self.path:
+            with open(self.path, "a") as f:
+                f.write(json.dumps(rec) + "\n")
+
+
+def model_info(step):
+    out, err, rc, _ = run([MESHBENCH, "info", step], 300)
+    info = last_json(out)
+    if rc != 0 or info is None:
+        raise RuntimeError(f"meshbench info {step} failed: {err[-500:]}")
+    return info
+
+
+SCORE_FIELDS = ("triangles", "nodes", "area_exact", "area_mesh", "area_deficit", "area_err_l1", "worst_face_area_err",
+                "hausdorff_rel", "rms_rel", "free_edges", "nonmanifold_edges", "inverted", "degenerate",
+                "faces_covered", "faces", "edge_tol_rel", "brep_free_edges")
+
+
+def mesh_and_score(a, step, mesher, label, cmd, extra, tmp, scores):
+    out = os.path.join(tmp, f"{mesher}.msh")
+    if os.path.exists(out):
+        os.remove(out)
+    rec = {"model": os.path.basename(step), "mesher": mesher, "setting": label}
+    rec.update(extra)
+    argv = cmd(step, out)
+    stdout, stderr, rc, wall = run(argv, a.timeout + 30)
+    rec["wall"] = round(wall, 3)
+    own = last_json(stdout) or {}
+    if rc == "timeout" or (mesher == "rdmesh" and isinstance(own.get("error"), dict) and own["error"].get("code") == "deadline_exceeded"):
+        rec["error"] = f"timeout after {a.timeout} s"
+        rec["timeout"] = True
+        return rec
+    if rc != 0 or not os.path.exists(out):
+        msg = own.get("error") if isinstance(own.get("error"), dict) else (stderr.strip()[-300:] or stdout.strip()[-300:])
+        rec["error"] = f"exit {rc}: {msg}"
+        return rec
+    rec["seconds"] = own.get("seconds", wall)
+    if mesher == "rdmesh":
+        for k in ("faces_failed", "faces_skipped", "requested_deviation", "estimated_deviation"):
+            if k in own:
+                rec[k] = own[k]
+        failed = [f for f in own.get("faces", []) if f.get("status") not in (None, "ok")]
+        if failed:
+            rec["failed_faces"] = [{"id": f.get("id"), "status": f.get("status"), "reason": f.get("reason", "")[:120]}
+                                   for f in failed[:10]]
+    # Scoring dominates the run time on B-spline models (a point projection per sample), and
+    # BRepMesh often returns the very same mesh for neighbouring settings: score each mesh once.
+    rec["msh_sha"] = sha256(out)
+    known = scores.get((rec["model"], rec["msh_sha"]))
+    if known is not None:
+        rec.update({k: v for k, v in known.items() if k in SCORE_FIELDS})
+        rec["score_of"] = known["setting"]
+        os.remove(out)
+        return rec
+    sout, serr, src, swall = run([MESHBENCH, "eval", step, out], max(900, a.timeout * 3))
+    score = last_json(sout)
+    if src != 0 or score is None:
+        rec["error"] = f"eval failed ({src}): {serr.strip()[-300:]}"
+        return rec
+    rec["eval_wall"] = round(swall, 3)
+    rec.update(score)
+    scores[(rec["model"], rec["msh_sha"])] = rec
+    os.remove(out)
+    return rec
+
+
+def sweep_model(a, step, info, cache, tools, tmp):
+    name = os.path.basename(step)
+    diag = info["bbox_diag"]
+    results = []
+    for mesher in a.meshers:
+        done_groups, group_seen = set(), {}
+        for group, label, cmd, extra in LADDERS[mesher](a, diag):
+            if group in done_groups:
+                continue
+            key = "|".join([name, info["sha"], mesher, tools[mesher], label])
+            rec = cache.get(key) if (mesher != "rdmesh" or not a.fresh) else None
+            if rec is None:
+                rec = mesh_and_score(a, step, mesher, label, cmd, extra, tmp, cache.scores)
+                rec["key"] = key
+                rec["measured"] = datetime.datetime.now().isoformat(timespec="seconds")
+                cache.put(rec)
+                status = rec.get("error") or (f"{rec['triangles']} tris, dev {rec['hausdorff_rel']:.3g}, "
+                                              f"{rec['seconds']:.3g} s")
+                log(f"  {name} {mesher} {label}: {status}")
+            results.append(rec)
+            seen = group_seen.setdefault(group, [])
+            seen.append(rec.get("hausdorff_rel", 1.0))
+            # Finer settings only cost time past: a timeout, a huge mesh, the finest target met,
+            # or a floor (the model's own tolerance) that three more steps did not move.
+            # A floor counts only when the setting asks for well under the deviation measured (a
+            # plateau of BRepMesh's angle bound or of a dense ladder is no floor); rdmesh's short
+            # ladder always runs to the end, so a mesher stuck above its target shows in the report.
+            asked = extra.get("tol", extra.get("deflection_rel"))
+            floor = (mesher != "rdmesh" and len(seen) >= 4 and min(seen[-3:]) > 0.9 * min(seen[:-3])
+                     and (asked is None or asked < seen[-1] / 3))
+            if (rec.get("timeout") or rec.get("triangles", 0) > TRIANGLE_CAP
+                    or rec.get("hausdorff_rel", 1.0) <= min(TARGETS) or floor):
+                done_groups.add(group)
+    return results
+
+
+def summarize(records, info):
+    """Per mesher: the interpolated figures and the problems seen."""
+    s = {}
+    for mesher in {r["mesher"] for r in records}:
+        mine = [r for r in records if r["mesher"] == mesher]
+        fr = pareto([r for r in mine if valid(r)])
+        d = {"runs": len(mine), "front": [(r["setting"], r["triangles"], r["hausdorff_rel"]) for r in fr]}
+        for eps in TARGETS:
+            d[f"tris@{eps:g}"] = interpolate(fr, eps, "triangles")
+            d[f"secs@{eps:g}"] = interpolate(fr, eps, "seconds")
+        closed = info.get("brep_free_edges", 1) == 0
+        problems = []
+        for r in mine:
+            p = []
+            if "error" in r:
+                p.append(r["error"][:160])
+            else:
+                if r.get("faces_covered", 0) < r.get("faces", 0):
+                    p.append(f"{r['faces'] - r['faces_covered']} of {r['faces']} faces uncovered")
+                if closed and r.get("free_edges", 0) > 0:
+                    p.append(f"{r['free_edges']} free edges (closed model)")
+                if r.get("inverted", 0) > 0:
+                    p.append(f"{r['inverted']} inverted")
+                if r.get("faces_failed", 0):
+                    p.append(f"{r['faces_failed']} faces failed (rdmesh report)")
+                if mesher == "rdmesh" and "tol" in r and r["hausdorff_rel"] > 1.1 * r["tol"]:
+                    p.append(f"deviation {r['hausdorff_rel']:.3g} > requested {r['tol']:g}")
+            if p:
+                problems.append((r["setting"], p))
+        d["problems"] = problems
+        s[mesher] = d
+    return s
+
+
+def geomean(xs):
+    xs = [x for x in xs if x and x > 0]
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else None
+
+
+def fmt_n(x):
+    if x is None:
+        return "—"
+    return f"{x:,.0f}" if x >= 100 else f"{x:.3g}"
+
+
+def fmt_s(x):
+    return "—" if x is None else (f"{x:.3g}" if x < 100 else f"{x:.0f}")
+
+
+def fmt_r(x):
+    return "—" if x is None else f"{x:.2f}"
+
+
+def ratio(x, y):
+    return x / y if x and y else None
+
+
+def cpu_model():
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def git(*args):
+    try:
+        return subprocess.run(["git", "-C", REPO, *args], capture_output=True, text=True, check=True).stdout.strip()
+    except (subprocess.CalledProcessError, OSError):
+        return "?"
+
+
+def report(a, models, infos, summaries, records, meta):
+    ms = [m for m in a.meshers]
+    anchors = [m for m in ms if m != "rdmesh"]
+    L = []
+    L.append("# rdmesh benchmark results\n")
+    L.append(f"- Date: {meta['date']} (run took {meta['elapsed'] / 60:.1f} min)")
+    L.append(f"- Machine: {meta['nproc']} cores, {meta['cpu']}; load average at start {meta['load0']}, at end {meta['load1']} "
+             "(the machine is shared, so seconds are indicative)")
+    if meta["measured_rev"] == "working tree":
+        L.append(f"- rdmesh measured: the working tree at commit `{meta['head']}`"
+                 + (f", with uncommitted changes in engine/ or clients/cli/ ({meta['dirty']})" if meta["dirty"] else ", clean"))
+    else:
+        L.append(f"- rdmesh measured: commit `{meta['measured_rev']}` (built from a clean export; last commit touching "
+                 f"engine/: `{meta['engine_commit']}`)")
+    L.append(f"- rdmesh binary: `{os.path.relpath(a.rdmesh, REPO)}` (sha256 {meta['rdmesh_sha']}), `--threads {a.threads}`; "
+             f"BRepMesh: OCCT {meta['occt']} via `bench/brepmesh_runner` (InParallel); Gmsh {meta['gmsh']} (2 threads)")
+    L.append(f"- Command: `{meta['command']}`")
+    L.append(f"- Per-run timeout {a.timeout} s; ladders stop at {TRIANGLE_CAP:,} triangles or once a mesh reaches 1e-4.")
+    L.append("- Scorer: `/work/shared/yardstick/meshbench eval` (max deviation over the bbox diagonal, sampled at centroids, "
+             "edge midpoints and an interior lattice of every triangle).\n")
+    L.append("Figures are interpolated log-log along each mesher's Pareto front of (triangles, deviation) at a max "
+             "deviation of 1e-3 and 1e-4 of the bbox diagonal. `—` = not reached by the ladder. Ratios < 1 mean rdmesh "
+             "needs fewer triangles (or seconds). Seconds are meshing only (no file loading or writing).\n")
+
+    def table(title, key, fmt, corpus_models):
+        L.append(f"### {title}\n")
+        head = ["model", "faces"]
+        for eps in TARGETS:
+            head += [f"{LABELS[m]} @{eps:g}" for m in ms] + [f"rd/{LABELS[m]} @{eps:g}" for m in anchors]
+        L.append("| " + " | ".join(head) + " |")
+        L.append("|" + "---|" * 2 + "---:|" * (len(head) - 2))
+        rat = {(m, eps): [] for m in anchors for eps in TARGETS}
+        for name in corpus_models:
+            s = summaries[name]
+            row = [f"`{name}`", str(infos[name]["faces"])]
+            for eps in TARGETS:
+                vals = {m: s.get(m, {}).get(f"{key}@{eps:g}") for m in ms}
+                row += [fmt(vals[m]) for m in ms]
+                for m in anchors:
+                    r = ratio(vals.get("rdmesh"), vals[m])
+                    rat[(m, eps)].append(r)
+                    row.append(fmt_r(r))
+            L.append("| " + " | ".join(row) + " |")
+        row = ["**geometric mean**", ""]
+        for eps in TARGETS:
+            row += [""] * len(ms)
+            for m in anchors:
+                vs = [x for x in rat[(m, eps)] if x]
+                g = geomean(vs)
+                row.append(f"**{fmt_r(g)}** (n={len(vs)})" if g else "—")
+        L.append("| " + " | ".join(row) + " |")
+        L.append("")
+        return rat
+
+    corpus_models = [m for m in models if m not in ANALYTIC]
+    analytic_models = [m for m in models if m in ANALYTIC]
+    if corpus_models:
+        L.append(f"## Corpus models ({len(corpus_models)})\n")
+        tri_rat = table("Triangles", "tris", fmt_n, corpus_models)
+        sec_rat = table("Seconds (meshing time at the same deviation)", "secs", fmt_s, corpus_models)
+        L.append("### Geometric means of the ratios (rdmesh / anchor)\n")
+        L.append("| ratio | triangles @1e-3 | triangles @1e-4 | seconds @1e-3 | seconds @1e-4 |")
+        L.append("|---|---:|---:|---:|---:|")
+        for m in anchors:
+            cells = []
+            for rat in (tri_rat, sec_rat):
+                pass
+            cells = [tri_rat[(m, 1e-3)], tri_rat[(m, 1e-4)], sec_rat[(m, 1e-3)], sec_rat[(m, 1e-4)]]
+            L.append(f"| rdmesh/{LABELS[m]} | " + " | ".join(
+                f"{fmt_r(geomean(c))} (n={len([x for x in c if x])})" for c in cells) + " |")
+        L.append("")
+    if analytic_models:
+        L.append("## Analytic models against the theoretical minimum\n")
+        L.append("Triangles at the target deviation; in brackets the ratio to the minimum. Unit sphere: ~1396 triangles "
+                 "at 1e-3 of the diagonal, scaling as 1/deviation (13,960 at 1e-4). Cylinder r=1 h=4: n = ceil(pi / "
+                 "acos(1 - eps*diag)) segments per circle, 2n side triangles + 2(n-2) in the caps.\n")
+        head = ["model", "target", "minimum"] + [LABELS[m] for m in ms]
+        L.append("| " + " | ".join(head) + " |")
+        L.append("|---|---|" + "---:|" * (len(head) - 2))
+        for name in analytic_models:
+            for eps in TARGETS:
+                mn = theoretical_minimum(name, eps)
+                row = [f"`{name}` ({ANALYTIC[name]})", f"{eps:g}", fmt_n(mn)]
+                for m in ms:
+                    v = summaries[name].get(m, {}).get(f"tris@{eps:g}")
+                    row.append(f"{fmt_n(v)} ({v / mn:.2f}x)" if v and mn else fmt_n(v))
+                L.append("| " + " | ".join(row) + " |")
+        L.append("")
+
+    # rdmesh: requested vs measured deviation
+    rd = [r for r in records if r["mesher"] == "rdmesh" and "hausdorff_rel" in r]
+    if rd:
+        L.append("## rdmesh: requested vs measured deviation\n")
+        L.append("Measured max deviation (yardstick) over the requested `--max-deviation-rel`, per run; > 1 means the "
+                 "mesh misses the requested deviation.\n")
+        L.append("| model | " + " | ".join(f"tol {t:g}" for t in [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5]) + " |")
+        L.append("|---|" + "---:|" * 6)
+        for name in models:
+            cells = []
+            for t in [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5]:
+                r = next((r for r in rd if r["model"] == name and r.get("tol") == t), None)
+                if r is None:
+                    e = next((r for r in records if r["mesher"] == "rdmesh" and r["model"] == name and r.get("tol") == t), None)
+                    cells.append("error" if e else "")
+                else:
+                    x = r["hausdorff_rel"] / t
+                    cells.append(f"**{x:.2f}**" if x > 1.1 else f"{x:.2f}")
+            L.append(f"| `{name}` | " + " | ".join(cells) + " |")
+        L.append("")
+
+    L.append("## Failures and defects\n")
+    L.append("Every run with faces left uncovered, free edges on a closed model (the B-rep has no free edges), "
+             "inverted triangles, faces the mesher reported failed, errors or timeouts; for rdmesh also a measured "
+             "deviation more than 10% above the requested one.\n")
+    any_problem = False
+    for name in models:
+        for m in ms:
+            probs = summaries[name].get(m, {}).get("problems", [])
+            if not probs:
+                continue
+            any_problem = True
+            closed = "closed" if infos[name].get("brep_free_edges", 1) == 0 else "open"
+            items = "; ".join(f"{lab}: {', '.join(p)}" for lab, p in probs[:8])
+            more = f"; … {len(probs) - 8} more runs" if len(probs) > 8 else ""
+            L.append(f"- `{name}` ({closed}) **{LABELS[m]}** ({len(probs)} of {summaries[name][m]['runs']} runs): {items}{more}")
+    if not any_problem:
+        L.append("None.")
+    L.append("")
+    return "\n".join(L)
+
+
+def cmake_build(src, build, targets, extra=()):
+    if not os.path.exists(os.path.join(build, "build.ninja")):
+        subprocess.run(["cmake", "-S", src, "-B", build, "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
+                        "-DRDMESH_BUILD_SERVER=OFF", "-DRDMESH_BUILD_TESTS=OFF", *extra], check=True,
+                       stdout=subprocess.DEVNULL)
+    subprocess.run(["ninja", "-C", build, "-j2", *targets], check=True, stdout=subprocess.DEVNULL)
+
+
+def build_snapshot(a, rev):
+    """rdmesh built from a clean export of commit `rev` (the shared tree may hold others'
+    uncommitted edits), in BUILD/snapshot/REV; returns the binary."""
+    root = os.path.join(a.build_dir, "snapshot", rev)
+    binary = os.path.join(root, "build", "bin", "rdmesh")
+    if os.path.exists(binary):
+        return binary
+    src = os.path.join(root, "src")
+    os.makedirs(src, exist_ok=True)
+    log(f"building rdmesh at commit {rev} in {root} ...")
+    tar = subprocess.run(["git", "-C", REPO, "archive", rev, "CMakeLists.txt", "engine", "clients/cli"],
+                         capture_output=True, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", src], input=tar, check=True)
+    cmake_build(src, os.path.join(root, "build"), ["rdmesh"], ["-DRDMESH_BUILD_BENCH=OFF"])
+    return binary
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--models", nargs="+", help="corpus file names (with or without extension) or paths; 'all' = whole corpus")
+    ap.add_argument("--quick", action="store_true", help=f"the {len(QUICK)} small models of the quick set")
+    ap.add_argument("--out", default=os.path.join(HERE, "RESULTS.md"), help="Markdown report (default bench/RESULTS.md)")
+    ap.add_argument("--build-dir", default=os.path.join(REPO, "build-bench"))
+    ap.add_argument("--rdmesh-rev", default="HEAD",
+                    help="commit whose rdmesh is measured, built from a clean export in BUILD/snapshot/ "
+                         "(default HEAD); 'worktree' = the working tree as it is, built in BUILD")
+    ap.add_argument("--rdmesh", default=None, help="an rdmesh binary to measure instead (no build)")
+    ap.add_argument("--meshers", default="rdmesh,brepmesh,gmsh")
+    ap.add_argument("--threads", type=int, default=os.cpu_count() or 2, help="rdmesh --threads (default nproc)")
+    ap.add_argument("--timeout", type=float, default=300, help="seconds per meshing run (default 300)")
+    ap.add_argument("--no-analytic", action="store_true", help="skip the sphere and cylinder")
+    ap.add_argument("--no-build", action="store_true", help="use the binaries as they are")
+    ap.add_argument("--fresh", action="store_true", help="rerun rdmesh even when the cache has this binary's results")
+    ap.add_argument("--no-cache", action="store_true")
+    a = ap.parse_args()
+    t_start = time.time()
+    load0 = " ".join(open("/proc/loadavg").read().split()[:3])
+
+    a.brepmesh_runner = os.path.join(a.build_dir, "bin", "brepmesh_runner")
+    a.meshers = [m.strip() for m in a.meshers.split(",") if m.strip()]
+    subprocess.run([os.path.join(YARD, "build.sh")], check=True)
+    if not a.no_build:
+        cmake_build(REPO, a.build_dir, ["brepmesh_runner"] + (["rdmesh"] if a.rdmesh_rev == "worktree" else []))
+    a.measured_rev = "working tree"
+    if a.rdmesh is None and a.rdmesh_rev != "worktree":
+        a.measured_rev = git("rev-parse", "--short=10", a.rdmesh_rev)
+        a.rdmesh = build_snapshot(a, a.measured_rev)
+    a.rdmesh = a.rdmesh or os.path.join(a.build_dir, "bin", "rdmesh")
+    gmsh_version = "n/a"
+    if "gmsh" in a.meshers:
+        p = subprocess.run([PYTHON, "-c", "import gmsh; print(gmsh.__version__)"], capture_output=True, text=True)
+        if p.returncode != 0:
+            log("python3-gmsh not installed: Gmsh skipped")
+            a.meshers.remove("gmsh")
+        else:
+            gmsh_version = p.stdout.strip()
+    occt = "?"
+    try:
+        occt = subprocess.run(["dpkg-query", "-W", "-f=${Version}", "libocct-modeling-algorithms-7.6"],
+                              capture_output=True, text=True).stdout.strip() or "7.6"
+    except OSError:
+        pass
+    tools = {"rdmesh": "rdmesh-" + sha256(a.rdmesh) if "rdmesh" in a.meshers else "",
+             "brepmesh": f"occt-{occt}-runner-{sha256(os.path.join(HERE, 'brepmesh_runner.cpp'))}",
+             "gmsh": f"gmsh-{gmsh_version}"}
+
+    names = a.models or (QUICK if a.quick else DEFAULT)
+    if names == ["all"]:
+        names = sorted(f for f in os.listdir(CORPUS) if f.endswith((".stp", ".step")))
+    steps = []
+    for n in names:
+        if os.path.exists(n):
+            steps.append(os.path.abspath(n))
+            continue
+        cands = [f for f in os.listdir(CORPUS) if f == n or os.path.splitext(f)[0] == n]
+        if not cands:
+            sys.exit(f"no model {n} in {CORPUS}")
+        steps.append(os.path.join(CORPUS, cands[0]))
+    if not a.no_analytic:
+        steps += [os.path.join(YARD, "models", m) for m in ANALYTIC]
+
+    os.makedirs(a.build_dir, exist_ok=True)
+    cache = Cache(None if a.no_cache else os.path.join(a.build_dir, "bench_cache.jsonl"))
+    tmp = tempfile.mkdtemp(prefix="rdmesh-bench-")
+    models, infos, summaries, records = [], {}, {}, []
+    try:
+        for i, step in enumerate(steps):
+            name = os.path.basename(step)
+            info = model_info(step)
+            info["sha"] = sha256(step)
+            log(f"[{i + 1}/{len(steps)}] {name}: {info['faces']} faces, diag {info['bbox_diag']:.4g}")
+            recs = sweep_model(a, step, info, cache, tools, tmp)
+            models.append(name)
+            infos[name] = info
+            records += recs
+            summaries[name] = summarize(recs, info)
+            for m in a.meshers:
+                s = summaries[name][m]
+                log(f"    {m:9s} tris@1e-3 {fmt_n(s['tris@0.001'])}  tris@1e-4 {fmt_n(s['tris@0.0001'])}  "
+                    f"secs@1e-3 {fmt_s(s['secs@0.001'])}  secs@1e-4 {fmt_s(s['secs@0.0001'])}")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+    dirty = git("status", "--porcelain", "--", "engine", "clients/cli")
+    meta = {
+        "date": datetime.datetime.now().strftime("%Y-%m-%d %H:%M %Z").strip() or time.ctime(),
+        "elapsed": time.time() - t_start,
+        "nproc": os.cpu_count(), "cpu": cpu_model(), "load0": load0,
+        "load1": " ".join(open("/proc/loadavg").read().split()[:3]),
+        "head": git("rev-parse", "--short=10", "HEAD"), "measured_rev": a.measured_rev,
+        "engine_commit": git("log", "-1", "--format=%h", a.measured_rev if a.measured_rev != "working tree" else "HEAD", "--", "engine"),
+        "dirty": a.measured_rev == "working tree" and len(dirty.splitlines()) and f"{len(dirty.splitlines())} files",
+        "rdmesh_sha": tools["rdmesh"].replace("rdmesh-", ""),
+        "occt": occt, "gmsh": gmsh_version,
+        "command": "/usr/bin/python3 " + " ".join(shlex.quote(x) for x in
+                                                   [os.path.relpath(sys.argv[0], REPO) if sys.argv[0].startswith(REPO) else sys.argv[0]] + sys.argv[1:]),
+    }
+    md = report(a, models, infos, summaries, records, meta)
+    # A hand-written "## Discussion" in the previous report is kept (it names the run it discusses).
+    if a.out and os.path.exists(a.out):
+        old = open(a.out).read()
+        if "\n## Discussion" in old:
+            md += "\n## Discussion" + old.split("\n## Discussion", 1)[1].rstrip() + "\n"
+    print(md)
+    if a.out:
+        with open(a.out, "w") as f:
+            f.write(md)
+        raw = os.path.join(a.build_dir, "bench_last_run.json")
+        with open(raw, "w") as f:
+            json.dump({"meta": meta, "models": infos, "summary": summaries, "records": records}, f, indent=1)
+        log(f"wrote {a.out} and {raw}")
+
+
+if __name__ == "__main__":
+    main()
