@@ -1,3 +1,7 @@
+// OCC_CATCH_SIGNALS below must turn access violations inside OCCT's translators into exceptions
+// (Debian's OCCT is built this way too); it has to be defined before any OCCT header.
+#define OCC_CONVERT_SIGNALS 1
+
 #include "model_readers.h"
 
 #include <unistd.h>
@@ -8,12 +12,17 @@
 #include <IGESCAFControl_Reader.hxx>
 #include <IGESData_GlobalSection.hxx>
 #include <IGESData_IGESModel.hxx>
+#include <Interface_Check.hxx>
+#include <Interface_CheckIterator.hxx>
+#include <Interface_InterfaceModel.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Message_Printer.hxx>
 #include <Message_ProgressIndicator.hxx>
+#include <OSD.hxx>
 #include <STEPCAFControl_Reader.hxx>
 #include <STEPControl_Reader.hxx>
+#include <Standard_ErrorHandler.hxx>
 #include <Standard_Failure.hxx>
 #include <TColStd_SequenceOfAsciiString.hxx>
 #include <TCollection_HAsciiString.hxx>
@@ -23,14 +32,21 @@
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <XSControl_WorkSession.hxx>
 #include <algorithm>
 #include <cctype>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <istream>
 #include <mutex>
+#include <regex>
 #include <sstream>
+#include <streambuf>
+#include <vector>
 
 namespace rdmesh {
 
@@ -48,6 +64,33 @@ void SilenceOcctMessages() {
   std::call_once(
       once, [] { Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_Printer)); });
 }
+
+// While alive, faults (SIGSEGV, SIGBUS, SIGFPE, SIGILL) go to OCCT's handlers, which jump to the
+// nearest OCC_CATCH_SIGNALS and throw a Standard_Failure: OCCT 7.6's translators dereference null
+// entities in some broken files. Every other signal keeps its handler (Ctrl-C still cancels),
+// and the previous handlers come back at the end. Process-wide: callers hold ReaderMutex.
+class ScopedOcctFaultHandlers {
+ public:
+  ScopedOcctFaultHandlers() {
+    for (int signal = 1; signal < kSignals; ++signal) sigaction(signal, nullptr, &saved_[signal]);
+    OSD::SetSignal(OSD_SignalMode_Set, /*theFloatingSignal=*/false);
+    for (int signal = 1; signal < kSignals; ++signal)
+      if (!IsFault(signal)) sigaction(signal, &saved_[signal], nullptr);
+  }
+  ~ScopedOcctFaultHandlers() {
+    for (int signal = 1; signal < kSignals; ++signal)
+      if (IsFault(signal)) sigaction(signal, &saved_[signal], nullptr);
+  }
+  ScopedOcctFaultHandlers(const ScopedOcctFaultHandlers&) = delete;
+  ScopedOcctFaultHandlers& operator=(const ScopedOcctFaultHandlers&) = delete;
+
+ private:
+  static constexpr int kSignals = 32;  // the standard signals
+  static bool IsFault(int signal) {
+    return signal == SIGSEGV || signal == SIGBUS || signal == SIGFPE || signal == SIGILL;
+  }
+  struct sigaction saved_[kSignals] = {};
+};
 
 // Lets a Context stop an OCCT transfer: OCCT polls UserBreak() between entities.
 class StopIndicator : public Message_ProgressIndicator {
@@ -93,6 +136,30 @@ std::string LastLine(const std::string& bytes) {
   return bytes.substr(begin, end - begin + 1);
 }
 
+// A BREP file lists "TShapes N", then N shapes whose sub-shape lists each end with '*', then the
+// root as "+id location". OCCT's reader loops forever on some truncated files: check first.
+bool BrepIsComplete(const std::string& bytes) {
+  size_t header = bytes.find("\nTShapes ");
+  if (header == std::string::npos) return false;
+  long count = std::strtol(bytes.c_str() + header + 9, nullptr, 10);
+  if (count <= 0) return false;
+  long starred = 0;
+  std::string root;
+  std::istringstream lines(bytes.substr(header + 1));
+  for (std::string line; std::getline(lines, line);) {
+    size_t end = line.find_last_not_of(" \t\r");
+    if (end == std::string::npos) continue;
+    line.resize(end + 1);
+    if (line.back() == '*') {
+      ++starred;
+    } else if (starred >= count && root.empty()) {
+      root = line;
+    }
+  }
+  static const std::regex kRoot("[+\\-ie][0-9]+ [0-9]+");
+  return starred >= count && std::regex_match(root, kRoot);
+}
+
 // Header and trailer checks that OCCT's parsers do not make reliably.
 Status CheckFraming(const std::string& bytes, ModelFormat format, const std::string& name) {
   switch (format) {
@@ -115,12 +182,41 @@ Status CheckFraming(const std::string& bytes, ModelFormat format, const std::str
     case ModelFormat::kBrep:
       if (FormatFromContent(bytes) != ModelFormat::kBrep)
         return ParseError(name, "not a BREP file (no CASCADE Topology header)");
+      if (!BrepIsComplete(bytes))
+        return ParseError(name, "truncated BREP file (incomplete TShapes section)");
       return Status::Ok();
     case ModelFormat::kAuto:
       break;
   }
   return ParseError(name, "unknown model format");
 }
+
+// An input stream over bytes held elsewhere, so big files are not copied once more.
+class MemoryStreamBuffer : public std::streambuf {
+ public:
+  explicit MemoryStreamBuffer(const std::string& bytes) {
+    char* begin = const_cast<char*>(bytes.data());  // never written: get area only
+    setg(begin, begin, begin + bytes.size());
+  }
+
+ protected:
+  pos_type seekoff(off_type offset, std::ios_base::seekdir dir, std::ios_base::openmode) override {
+    char* base = dir == std::ios_base::beg ? eback() : dir == std::ios_base::cur ? gptr() : egptr();
+    return seekpos(pos_type(base - eback() + offset), std::ios_base::in);
+  }
+  pos_type seekpos(pos_type position, std::ios_base::openmode) override {
+    if (position < 0 || position > egptr() - eback()) return pos_type(off_type(-1));
+    setg(eback(), eback() + position, egptr());
+    return position;
+  }
+};
+
+// Swallows everything written to it.
+class NullStreamBuffer : public std::streambuf {
+ protected:
+  int_type overflow(int_type c) override { return traits_type::not_eof(c); }
+  std::streamsize xsputn(const char*, std::streamsize count) override { return count; }
+};
 
 Handle(TDocStd_Document) NewXcafDocument() {
   // Not NewDocument(): that registers the document in the application's session for good.
@@ -178,15 +274,72 @@ void SetUnit(ReadShape* read, const std::string& raw_name) {
   read->unit_scale_mm = unit.mm;
 }
 
+// Which parser complaints make OCCT 7.6's translators crash: they dereference the null fields
+// the parser leaves where a geometric or topological entity refers to a missing or wrong-typed
+// entity. Other complaints (names, styles, PMI) are harmless and common in real files.
+struct FatalChecks {
+  const char* format;                // "STEP" or "IGES", for messages
+  std::vector<std::string> types;    // entity class prefixes the translator dereferences
+  std::vector<std::string> ignored;  // harmless message fragments on those entities
+};
+
+// Real STEP files often carry names that are not quoted strings: those are harmless.
+const FatalChecks kStepChecks{"STEP", {"StepGeom_", "StepShape_"}, {"quoted String"}};
+const FatalChecks kIgesChecks{"IGES", {"IGESGeom_", "IGESSolid_"}, {}};
+
+bool StartsWithAny(const std::string& text, const std::vector<std::string>& prefixes) {
+  for (const std::string& prefix : prefixes)
+    if (text.rfind(prefix, 0) == 0) return true;
+  return false;
+}
+
+bool ContainsAny(const std::string& text, const std::vector<std::string>& parts) {
+  for (const std::string& part : parts)
+    if (text.find(part) != std::string::npos) return true;
+  return false;
+}
+
+// Refuses a parsed file whose geometry the translator would crash on.
+Status CheckReferences(XSControl_Reader& reader, const FatalChecks& fatal,
+                       const std::string& name) {
+  Handle(Interface_InterfaceModel) model = reader.WS()->Model();
+  if (model.IsNull()) return Status::Ok();
+  Interface_CheckIterator checks = reader.WS()->ModelCheckList(/*complete=*/false);
+  int broken = 0;
+  std::string first;
+  for (checks.Start(); checks.More(); checks.Next()) {
+    const Handle(Interface_Check)& check = checks.Value();
+    int number = checks.Number();
+    if (!check->HasFailed() || number < 1 || number > model->NbEntities()) continue;
+    Handle(Standard_Transient) entity = model->Value(number);
+    std::string type = entity->DynamicType()->Name();
+    if (!StartsWithAny(type, fatal.types)) continue;
+    for (int i = 1; i <= check->NbFails(); ++i) {
+      std::string message = check->CFail(i);
+      if (ContainsAny(message, fatal.ignored)) continue;
+      if (broken++ == 0)
+        first = std::string(model->StringLabel(entity)->ToCString()) + " (" +
+                type.substr(type.find('_') + 1) + "): " + message;
+    }
+  }
+  if (broken == 0) return Status::Ok();
+  return ParseError(
+      name, std::string("broken ") + fatal.format + " data at " + first +
+                (broken > 1 ? " (and " + std::to_string(broken - 1) + " more)" : std::string()));
+}
+
 Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
                            const Context* context) {
   STEPCAFControl_Reader reader;
   reader.SetColorMode(true);
   reader.SetNameMode(true);
   reader.SetLayerMode(true);
-  std::istringstream stream(bytes);
+  MemoryStreamBuffer buffer(bytes);
+  std::istream stream(&buffer);
   if (reader.ChangeReader().ReadStream(name.c_str(), stream) != IFSelect_RetDone)
     return ParseError(name, "not a valid STEP file (the parser failed)");
+  Status references = CheckReferences(reader.ChangeReader(), kStepChecks, name);
+  if (!references.ok()) return references;
   if (reader.NbRootsForTransfer() == 0) return ParseError(name, "the STEP file holds no shapes");
 
   ReadShape read;
@@ -242,6 +395,8 @@ Result<ReadShape> ReadIges(const std::string& bytes, const std::string& path,
   reader.SetLayerMode(true);
   if (reader.ReadFile(file.c_str()) != IFSelect_RetDone)
     return ParseError(name, "not a valid IGES file (the parser failed)");
+  Status references = CheckReferences(reader, kIgesChecks, name);
+  if (!references.ok()) return references;
 
   ReadShape read;
   Handle(IGESData_IGESModel) iges = reader.IGESModel();
@@ -274,7 +429,8 @@ Result<ReadShape> ReadIges(const std::string& bytes, const std::string& path,
 Result<ReadShape> ReadBrep(const std::string& bytes, const std::string& name,
                            const Context* context) {
   ReadShape read;
-  std::istringstream stream(bytes);
+  MemoryStreamBuffer buffer(bytes);
+  std::istream stream(&buffer);
   BRep_Builder builder;
   Handle(StopIndicator) indicator = new StopIndicator(context);
   BRepTools::Read(read.shape, stream, builder, indicator->Start());
@@ -313,7 +469,16 @@ Result<ReadShape> ReadModelBytes(const std::string& bytes, ModelFormat format,
 
   std::lock_guard<std::mutex> lock(ReaderMutex());
   SilenceOcctMessages();
+  // Some OCCT readers also print straight to std::cout ("Not a TShape table"), which would mix
+  // into a client's stdout (rdmesh --json): mute it while reading.
+  NullStreamBuffer null_buffer;
+  struct CoutRestorer {
+    std::streambuf* saved;
+    ~CoutRestorer() { std::cout.rdbuf(saved); }
+  } restore_cout{std::cout.rdbuf(&null_buffer)};
+  ScopedOcctFaultHandlers fault_handlers;
   try {
+    OCC_CATCH_SIGNALS
     switch (format) {
       case ModelFormat::kStep:
         return ReadStep(bytes, name, context);

@@ -281,6 +281,60 @@ TEST_F(ModelTest, BadInput) {
   }
 }
 
+TEST_F(ModelTest, BrokenReferencesAreRefused) {
+  // An ADVANCED_FACE whose surface is a missing entity: OCCT's translator would crash on it.
+  std::string step = ReadBytes(DataPath("cq_red_cube_blue_cylinder.step"));
+  size_t face = step.find("ADVANCED_FACE");
+  ASSERT_NE(face, std::string::npos);
+  size_t line_end = step.find(';', face);
+  size_t last_ref = step.rfind('#', line_end);
+  ASSERT_GT(last_ref, face);
+  std::string broken = step.substr(0, last_ref) + "#999999" +
+                       step.substr(step.find_first_not_of("0123456789", last_ref + 1));
+  ExpectError(LoadModel(Write("broken.step", broken)), StatusCode::kParseError, "broken.step",
+              "broken STEP data");
+}
+
+// Files with a few bytes changed load or fail with a message; they never crash or hang.
+TEST_F(ModelTest, MutatedFilesNeverCrash) {
+  std::string iges_path = (dir_ / "box.igs").string();
+  IGESControl_Writer writer("MM", 1);
+  writer.AddShape(Box());
+  writer.AddShape(
+      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(50, 0, 0), gp_Dir(0, 0, 1)), 5, 10).Shape());
+  writer.ComputeModel();
+  ASSERT_TRUE(writer.Write(iges_path.c_str()));
+  const std::string sources[] = {ReadBytes(DataPath("nist_mbe_pmi_11.stp")),
+                                 ReadBytes(DataPath("cq_red_cube_blue_cylinder.step")),
+                                 ReadBytes(iges_path)};
+  const char* const extensions[] = {".step", ".step", ".igs"};
+  const std::string alphabet = "0123456789#,();.-+ E'$*DH";
+  std::mt19937 random(2024);
+  int loaded = 0, refused = 0;
+  for (int source = 0; source < 3; ++source) {
+    for (int trial = 0; trial < 25; ++trial) {
+      std::string bytes = sources[source];
+      int changes = 1 + static_cast<int>(random() % 6);
+      for (int c = 0; c < changes; ++c)
+        bytes[500 + random() % (bytes.size() - 600)] = alphabet[random() % alphabet.size()];
+      std::string name = "mutant_" + std::to_string(source) + "_" + std::to_string(trial);
+      auto model = LoadModel(Write(name + extensions[source], bytes));
+      if (model.ok()) {
+        ++loaded;
+        EXPECT_GT((*model)->face_count(), 0);
+        continue;
+      }
+      ++refused;
+      EXPECT_TRUE(model.status().code() == StatusCode::kParseError ||
+                  model.status().code() == StatusCode::kEmptyModel)
+          << model.status().ToString();
+      EXPECT_NE(model.status().message().find(name), std::string::npos);
+    }
+  }
+  EXPECT_EQ(loaded + refused, 75);
+  EXPECT_GT(refused, 0);
+}
+
 TEST_F(ModelTest, EmptyModel) {
   std::string path = (dir_ / "vertex.brep").string();
   BRep_Builder builder;
