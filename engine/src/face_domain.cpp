@@ -159,9 +159,9 @@ std::vector<Vec2> SeedPoints(const FaceDomain& d, Surface& s) {
     }
     return worst;
   };
-  const double kStep = M_PI / 4;
-  int nu = std::clamp(static_cast<int>(std::ceil(turn(true) / kStep - 1e-9)), 1, 8);
-  int nv = std::clamp(static_cast<int>(std::ceil(turn(false) / kStep - 1e-9)), 1, 8);
+  const double kStep = M_PI / 6;
+  int nu = std::clamp(static_cast<int>(std::ceil(turn(true) / kStep - 1e-9)), 1, 12);
+  int nv = std::clamp(static_cast<int>(std::ceil(turn(false) / kStep - 1e-9)), 1, 12);
   std::vector<Vec2> seeds;
   if (nu * nv <= 1) return seeds;
   double cell = std::min(du * d.scale_u / nu, dv * d.scale_v / nv);

@@ -17,7 +17,7 @@ constexpr double kMinWeight = 0.04;
 constexpr double kEdgeWeight = 0.12;
 // A triangle that descends from this many splits and still violates is not split again: a
 // safety net against refinement that makes no progress (sizes shrink ~3x a generation).
-constexpr int kMaxGeneration = 40;
+constexpr int kMaxGeneration = 60;
 // The violation given to a folded triangle.
 constexpr double kFoldViolation = 4.0;
 // Below this shape quality (1 = equilateral) a triangle to refine is a sliver.
@@ -70,7 +70,9 @@ class Refiner {
   bool SplitOk(double child_min, const std::vector<int>& parents) const {
     double parent_min = 1;
     for (int t : parents) parent_min = std::min(parent_min, measure_[t].agreement);
-    if (parent_min <= 0) return child_min > kInvalid && child_min >= parent_min;
+    // A parent that already stands up against the surface spans too much of it: its children
+    // may fold, and refinement (folds count as violations) goes on until they do not.
+    if (parent_min < c_.min_normal_cos) return child_min > kInvalid;
     return child_min > 0;
   }
   double Agreement(int t) const {
@@ -116,7 +118,7 @@ class Refiner {
     // Generation: how many splits a triangle descends from (flips and collapses keep it).
     int gen = 0;
     for (int t : cavity) gen = std::max(gen, static_cast<int>(gen_[t]));
-    if (splitting_) gen = std::min(gen + 1, 255);
+    if (splitting_ && tris.size() > cavity.size()) gen = std::min(gen + 1, 255);
     std::vector<int> ids = ReplaceCavity(&m_, cavity, tris);
     if (measure_.size() < m_.tri.size()) {
       measure_.resize(m_.tri.size());
@@ -310,7 +312,7 @@ bool Refiner::SplitTriangle(int t) {
     b = clamp_weights(b, kEdgeWeight);
   }
   const double longest = mt.max_length;
-  for (Vec2 bb : {b, Vec2{1.0 / 3, 1.0 / 3}}) {
+  for (Vec2 bb : {b, Vec2{1.0 / 3, 1.0 / 3}, Vec2{0.25, 0.25}, Vec2{0.5, 0.25}, Vec2{0.25, 0.5}}) {
     int node = NewNode(to_uv(bb));
     // A node on top of a corner makes slivers, not progress.
     bool apart = true;
