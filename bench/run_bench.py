@@ -309,7 +309,7 @@ def summarize(records, info):
         for r in mine:
             p = []
             if "error" in r:
-                p.append(r["error"][:160])
+                p.append(" ".join(r["error"].split())[:90])
             else:
                 if r.get("faces_covered", 0) < r.get("faces", 0):
                     p.append(f"{r['faces'] - r['faces_covered']} of {r['faces']} faces uncovered")
@@ -383,8 +383,14 @@ def report(a, models, infos, summaries, records, meta):
         L.append(f"- rdmesh measured: commit `{meta['measured_rev']}` (the last commit touching engine/ or clients/cli/ "
                  f"at HEAD `{meta['head']}`; built from a clean export of it)")
     L.append(f"- rdmesh binary: `{os.path.relpath(a.rdmesh, REPO)}` (sha256 {meta['rdmesh_sha']}), `--threads {a.threads}`; "
-             f"BRepMesh: OCCT {meta['occt']} via `bench/brepmesh_runner` (InParallel); Gmsh {meta['gmsh']} (2 threads)")
+             f"BRepMesh: OCCT {meta['occt']} via `bench/brepmesh_runner` (InParallel); Gmsh {meta['gmsh']} "
+             f"(Debian python3-gmsh {meta['gmsh_deb']}, 2 threads)")
     L.append(f"- Command: `{meta['command']}`")
+    times = sorted(r["measured"] for r in records if "measured" in r)
+    if times:
+        L.append(f"- Records: {len(records)} meshing runs, measured between {times[0]} and {times[-1]} (anchor and "
+                 "unchanged-rdmesh results come from the cache in build-bench/bench_cache.jsonl, so a rerun takes "
+                 "less time than the measurements did).")
     L.append(f"- Per-run timeout {a.timeout:g} s; meshes over {a.score_cap:,} triangles are not scored (scoring B-spline "
              "faces runs at a few thousand triangles per second) and end their ladder; ladders also stop once a mesh reaches 1e-4.")
     L.append("- Scorer: `/work/shared/yardstick/meshbench eval` (max deviation over the bbox diagonal, sampled at centroids, "
@@ -627,6 +633,8 @@ def main():
         "dirty": a.measured_rev == "working tree" and len(dirty.splitlines()) and f"{len(dirty.splitlines())} files",
         "rdmesh_sha": tools["rdmesh"].replace("rdmesh-", ""),
         "occt": occt, "gmsh": gmsh_version,
+        "gmsh_deb": subprocess.run(["dpkg-query", "-W", "-f=${Version}", "python3-gmsh"], capture_output=True,
+                                   text=True).stdout.strip() or "n/a",
         "command": "/usr/bin/python3 " + " ".join(shlex.quote(x) for x in
                                                    [os.path.relpath(sys.argv[0], REPO) if sys.argv[0].startswith(REPO) else sys.argv[0]] + sys.argv[1:]),
     }
