@@ -17,7 +17,9 @@ constexpr double kMinWeight = 0.04;
 constexpr double kEdgeWeight = 0.12;
 // A triangle that descends from this many splits and still violates is not split again: a
 // safety net against refinement that makes no progress (sizes shrink ~3x a generation).
-constexpr int kMaxGeneration = 60;
+constexpr int kMaxGeneration = 40;
+// Splits of standing triangles may fold children only in the first generations.
+constexpr int kFoldingGenerations = 6;
 // The violation given to a folded triangle.
 constexpr double kFoldViolation = 4.0;
 // Below this shape quality (1 = equilateral) a triangle to refine is a sliver.
@@ -69,10 +71,16 @@ class Refiner {
   // Splits may not fold a child, except that a folded parent may leave children no worse.
   bool SplitOk(double child_min, const std::vector<int>& parents) const {
     double parent_min = 1;
-    for (int t : parents) parent_min = std::min(parent_min, measure_[t].agreement);
-    // A parent that already stands up against the surface spans too much of it: its children
-    // may fold, and refinement (folds count as violations) goes on until they do not.
-    if (parent_min < c_.min_normal_cos) return child_min > kInvalid;
+    int parent_gen = 0;
+    for (int t : parents) {
+      parent_min = std::min(parent_min, measure_[t].agreement);
+      parent_gen = std::max(parent_gen, static_cast<int>(gen_[t]));
+    }
+    // A young parent that stands up against the surface spans too much of it: its children may
+    // fold, and refinement (a fold counts as a violation) goes on until they do not. Later
+    // generations may not fold.
+    if (parent_min < 0.2 && parent_gen < kFoldingGenerations) return child_min > kInvalid;
+    if (parent_min <= 0) return child_min > kInvalid && child_min >= parent_min;
     return child_min > 0;
   }
   double Agreement(int t) const {
@@ -118,7 +126,7 @@ class Refiner {
     // Generation: how many splits a triangle descends from (flips and collapses keep it).
     int gen = 0;
     for (int t : cavity) gen = std::max(gen, static_cast<int>(gen_[t]));
-    if (splitting_ && tris.size() > cavity.size()) gen = std::min(gen + 1, 255);
+    if (splitting_) gen = std::min(gen + 1, 255);
     std::vector<int> ids = ReplaceCavity(&m_, cavity, tris);
     if (measure_.size() < m_.tri.size()) {
       measure_.resize(m_.tri.size());
@@ -488,9 +496,10 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   std::vector<std::array<Vec3, 2>> saved_xyz;
   std::vector<Vec2> saved_uv;
   for (int x : movers) saved_uv.push_back(m_.uv[x]), saved_xyz.push_back({m_.xyz[x], m_.normal[x]});
-  for (int x : movers)
+  for (int x : movers) {
     if (!m_.fixed[x]) SmoothNode(x);
-  if (MaxViolation(region) <= 1.0) return true;
+    if (MaxViolation(region) <= 1.0) return true;
+  }
   for (int k = static_cast<int>(movers.size()) - 1; k >= 0; --k) {
     int x = movers[k];
     m_.uv[x] = saved_uv[k], m_.xyz[x] = saved_xyz[k][0], m_.normal[x] = saved_xyz[k][1];
