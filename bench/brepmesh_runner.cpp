@@ -28,7 +28,6 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
-
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -94,11 +93,13 @@ bool WriteMsh(const std::string& path, const std::vector<FaceMesh>& faces) {
     if (f.triangles.empty()) continue;
     first_tag[i] = next_tag;
     std::fprintf(out, "2 %zu 0 %zu\n", i + 1, f.nodes.size());
-    for (size_t k = 0; k < f.nodes.size(); ++k) std::fprintf(out, "%ld\n", next_tag + static_cast<long>(k));
+    for (size_t k = 0; k < f.nodes.size(); ++k)
+      std::fprintf(out, "%ld\n", next_tag + static_cast<long>(k));
     for (const gp_Pnt& p : f.nodes) std::fprintf(out, "%.17g %.17g %.17g\n", p.X(), p.Y(), p.Z());
     next_tag += static_cast<long>(f.nodes.size());
   }
-  std::fprintf(out, "$EndNodes\n$Elements\n%ld %ld 1 %ld\n", blocks, triangle_count, triangle_count);
+  std::fprintf(out, "$EndNodes\n$Elements\n%ld %ld 1 %ld\n", blocks, triangle_count,
+               triangle_count);
   long element = 1;
   for (size_t i = 0; i < faces.size(); ++i) {
     const FaceMesh& f = faces[i];
@@ -149,7 +150,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "brepmesh_runner: BRepMesh failed: %s\n", failure.GetMessageString());
     return 4;
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::vector<FaceMesh> faces;
   faces.reserve(face_map.Extent());

@@ -54,14 +54,23 @@ void MeshAtDeviation(benchmark::State& state, const char* name) {
     benchmark::DoNotOptimize(triangles);
   }
   state.counters["triangles"] = static_cast<double>(triangles);
-  state.counters["tri_per_s"] =
-      benchmark::Counter(static_cast<double>(triangles), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["tri_per_s"] = benchmark::Counter(static_cast<double>(triangles),
+                                                   benchmark::Counter::kIsIterationInvariantRate);
 }
 
 // Argument: 1 / max_deviation_rel (1e3 and 1e4 are the benchmark's two targets).
-BENCHMARK_CAPTURE(MeshAtDeviation, Sphere, "sphere.step")->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(MeshAtDeviation, Cylinder, "cylinder.step")->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(MeshAtDeviation, Torus, "torus.step")->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(MeshAtDeviation, Sphere, "sphere.step")
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(MeshAtDeviation, Cylinder, "cylinder.step")
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(MeshAtDeviation, Torus, "torus.step")
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -30,15 +30,18 @@ void Assemble(std::vector<FaceMesh>* faces, const std::vector<std::vector<NodeRe
       mesh->xyz.insert(mesh->xyz.end(), {f.xyz[3 * i], f.xyz[3 * i + 1], f.xyz[3 * i + 2]});
       mesh->node_dim.push_back(static_cast<int8_t>(r.dim));
       mesh->node_entity.push_back(r.dim == 2 ? f.face_id : r.entity);
-      if (r.dim == 2) mesh->node_param.insert(mesh->node_param.end(), {f.uv[2 * i], f.uv[2 * i + 1]});
-      else mesh->node_param.insert(mesh->node_param.end(), {r.dim == 1 ? r.t : 0.0, 0.0});
+      if (r.dim == 2)
+        mesh->node_param.insert(mesh->node_param.end(), {f.uv[2 * i], f.uv[2 * i + 1]});
+      else
+        mesh->node_param.insert(mesh->node_param.end(), {r.dim == 1 ? r.t : 0.0, 0.0});
     }
     for (size_t k = 0; k + 2 < f.triangles.size(); k += 3) {
       int64_t a = f.global_ids[f.triangles[k]], b = f.global_ids[f.triangles[k + 1]],
               c = f.global_ids[f.triangles[k + 2]];
       if (a == b || b == c || c == a) continue;  // collapsed at a pole
-      mesh->triangles.insert(mesh->triangles.end(), {static_cast<int32_t>(a), static_cast<int32_t>(b),
-                                                     static_cast<int32_t>(c)});
+      mesh->triangles.insert(
+          mesh->triangles.end(),
+          {static_cast<int32_t>(a), static_cast<int32_t>(b), static_cast<int32_t>(c)});
       mesh->triangle_face.push_back(f.face_id);
     }
   }

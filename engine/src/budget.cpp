@@ -12,7 +12,7 @@ Result<MeshResult> MeshWithinBudget(const Model& model, const MeshOptions& optio
                                     Context* context) {
   const int64_t budget = options.max_triangles;
   const double diag = model.info.diagonal;
-  const double floor = options.max_deviation;  // 0 = none
+  const double floor = options.max_deviation;   // 0 = none
   double lo = floor > 0 ? floor : 1e-7 * diag;  // finest allowed
   double hi = 0.25 * diag;                      // coarsest tried
   double d = floor > 0 ? floor : 1e-3 * diag;
@@ -50,9 +50,9 @@ Result<MeshResult> MeshWithinBudget(const Model& model, const MeshOptions& optio
     if (!best && fail_d >= hi) break;
   }
   if (!best)
-    return Status(StatusCode::kResourceExhausted,
-                  "no mesh fits in " + std::to_string(budget) + " triangles: the coarsest tried has " +
-                      std::to_string(fail_n));
+    return Status(StatusCode::kResourceExhausted, "no mesh fits in " + std::to_string(budget) +
+                                                      " triangles: the coarsest tried has " +
+                                                      std::to_string(fail_n));
   return std::move(*best);
 }
 

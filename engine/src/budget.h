@@ -8,8 +8,8 @@
 namespace rdmesh {
 
 /// One run at an absolute deviation (model units); the pipeline in engine.cpp.
-Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& options,
-                                   double deviation, Context* context);
+Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& options, double deviation,
+                                   Context* context);
 
 /// The best mesh with at most options.max_triangles triangles. options.max_deviation, when set,
 /// is a floor: the result never goes finer than it.

@@ -42,8 +42,10 @@ void MarkDomains(Cdt& cdt) {
         Cdt::Edge e(fh, i);
         Cdt::Face_handle n = fh->neighbor(i);
         if (n->info().nesting_level == -1) {
-          if (cdt.is_constrained(e)) border.push_back(e);
-          else queue.push_back(n);
+          if (cdt.is_constrained(e))
+            border.push_back(e);
+          else
+            queue.push_back(n);
         }
       }
     }

@@ -21,7 +21,6 @@ struct CdtResult {
 /// nesting rule). Points must be distinct; segments must not cross. Fails with a reason
 /// otherwise.
 Status ConstrainedTriangulation(const std::vector<Vec2>& points,
-                                const std::vector<std::array<int, 2>>& segments,
-                                CdtResult* result);
+                                const std::vector<std::array<int, 2>>& segments, CdtResult* result);
 
 }  // namespace rdmesh

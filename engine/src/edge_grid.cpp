@@ -22,8 +22,8 @@ SegmentMeasure MeasureSegment(Curve& curve, double a, double b) {
       },
       a, b, 5, 14, &sum);
   double far_value = 0;
-  MaximizeOnInterval([&](double t) { return PointSegmentDistance(curve.Point(t), pa, pb); }, a,
-                     b, 5, 12, &far_value);
+  MaximizeOnInterval([&](double t) { return PointSegmentDistance(curve.Point(t), pa, pb); }, a, b,
+                     5, 12, &far_value);
   m.sagitta = far_value;
   // One split recovers 3/4 of the length a segment misses (the deficit falls as 1/n^2), so the
   // segment's own RD (L_S - L_E) / L_E is 4/3 of the gain of its best split.
@@ -142,8 +142,10 @@ std::vector<double> DiscretizeCurve(Curve& curve, double first, double last,
     std::vector<double> ts = Equidistribute(fine, criteria, n);
     bool ok = true;
     for (size_t k = 0; k + 1 < ts.size() && ok; ++k) {
-      if (!(ts[k + 1] > ts[k])) ok = false;
-      else ok = SegmentViolation(MeasureSegment(curve, ts[k], ts[k + 1]), criteria) <= 1.0;
+      if (!(ts[k + 1] > ts[k]))
+        ok = false;
+      else
+        ok = SegmentViolation(MeasureSegment(curve, ts[k], ts[k + 1]), criteria) <= 1.0;
     }
     if (ok) return ts;
   }

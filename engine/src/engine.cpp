@@ -1,11 +1,12 @@
 // MeshModel: the pipeline. Edge grids once per edge, then every face in parallel worker threads,
 // then assembly in face order (so the output does not depend on the thread count).
+#include "rdmesh/engine.h"
+
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
-
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -15,7 +16,6 @@
 #include "face_mesher.h"
 #include "grids.h"
 #include "model.h"
-#include "rdmesh/engine.h"
 
 namespace rdmesh {
 
@@ -31,8 +31,8 @@ constexpr int64_t kFaceTriangleCap = 20'000'000;
 
 }  // namespace
 
-Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& options,
-                                   double deviation, Context* context) {
+Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& options, double deviation,
+                                   Context* context) {
   auto t0 = Clock::now();
   const int nf = model.face_count();
   MeshResult result;
@@ -143,9 +143,12 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   s.nodes = result.mesh.node_count();
   s.requested_deviation = deviation;
   for (const FaceMesh& f : result.faces) {
-    if (f.status == FaceStatus::kOk) ++s.faces_ok;
-    else if (f.status == FaceStatus::kFailed) ++s.faces_failed;
-    else ++s.faces_skipped;
+    if (f.status == FaceStatus::kOk)
+      ++s.faces_ok;
+    else if (f.status == FaceStatus::kFailed)
+      ++s.faces_failed;
+    else
+      ++s.faces_skipped;
     s.estimated_deviation = std::max(s.estimated_deviation, f.max_deviation);
     if (f.status != FaceStatus::kSkipped) s.exact_area += f.exact_area;
     s.mesh_area += f.area;

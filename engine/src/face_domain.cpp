@@ -9,7 +9,6 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
 #include <TopoDS_Wire.hxx>
-
 #include <cmath>
 
 #include "model.h"
@@ -63,13 +62,16 @@ Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGr
       TopoDS_Edge e = ex.Current();
       if (e.Orientation() == TopAbs_INTERNAL || e.Orientation() == TopAbs_EXTERNAL) continue;
       int eid = model.edges.FindIndex(e);
-      if (eid == 0) return Status(StatusCode::kInternal, "a face edge is missing from the edge map");
+      if (eid == 0)
+        return Status(StatusCode::kInternal, "a face edge is missing from the edge map");
       const EdgeGrid& g = grids[eid - 1];
-      if (g.t.size() < 2) return Status(StatusCode::kInternal, "edge " + std::to_string(eid) + " has no grid");
+      if (g.t.size() < 2)
+        return Status(StatusCode::kInternal, "edge " + std::to_string(eid) + " has no grid");
       double f, l;
       Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, f, l);
       if (pcurve.IsNull())
-        return Status(StatusCode::kInternal, "edge " + std::to_string(eid) + " has no pcurve on the face");
+        return Status(StatusCode::kInternal,
+                      "edge " + std::to_string(eid) + " has no pcurve on the face");
       const bool reversed = e.Orientation() == TopAbs_REVERSED;
       const int n = static_cast<int>(g.t.size());
       for (int k = 0; k < n; ++k) {

@@ -3,11 +3,10 @@
 // both sides of a seam, degenerate pole edges) built from the shared edge grids through the
 // face's pcurves, and a scale that makes the domain roughly isometric for 2D tests.
 
+#include <TopoDS_Face.hxx>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <TopoDS_Face.hxx>
 
 #include "geom.h"
 #include "rdmesh/status.h"
@@ -39,9 +38,9 @@ struct FaceDomain {
   std::vector<Vec2> uv;      ///< per node: surface parameters
   std::vector<Vec3> xyz;     ///< per node: world point (shared bit-identically with neighbours)
   std::vector<NodeRef> ref;  ///< per node: B-rep classification
-  std::vector<std::array<int, 2>> segments;  ///< node index pairs
-  std::vector<bool> segment_splittable;      ///< degenerate (pole) segments may be split
-  double scale_u = 1, scale_v = 1;           ///< multiply u, v by these for isotropic 2D tests
+  std::vector<std::array<int, 2>> segments;       ///< node index pairs
+  std::vector<bool> segment_splittable;           ///< degenerate (pole) segments may be split
+  double scale_u = 1, scale_v = 1;                ///< multiply u, v by these for isotropic 2D tests
   double umin = 0, umax = 0, vmin = 0, vmax = 0;  ///< bounds of the boundary nodes
 };
 

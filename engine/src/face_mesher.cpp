@@ -3,7 +3,6 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopoDS.hxx>
-
 #include <chrono>
 #include <cmath>
 
@@ -19,17 +18,28 @@ namespace {
 
 SurfaceType TypeOf(const TopoDS_Face& face) {
   switch (BRepAdaptor_Surface(face, Standard_False).GetType()) {
-    case GeomAbs_Plane: return SurfaceType::kPlane;
-    case GeomAbs_Cylinder: return SurfaceType::kCylinder;
-    case GeomAbs_Cone: return SurfaceType::kCone;
-    case GeomAbs_Sphere: return SurfaceType::kSphere;
-    case GeomAbs_Torus: return SurfaceType::kTorus;
-    case GeomAbs_BezierSurface: return SurfaceType::kBezier;
-    case GeomAbs_BSplineSurface: return SurfaceType::kBSpline;
-    case GeomAbs_SurfaceOfRevolution: return SurfaceType::kRevolution;
-    case GeomAbs_SurfaceOfExtrusion: return SurfaceType::kExtrusion;
-    case GeomAbs_OffsetSurface: return SurfaceType::kOffset;
-    default: return SurfaceType::kOther;
+    case GeomAbs_Plane:
+      return SurfaceType::kPlane;
+    case GeomAbs_Cylinder:
+      return SurfaceType::kCylinder;
+    case GeomAbs_Cone:
+      return SurfaceType::kCone;
+    case GeomAbs_Sphere:
+      return SurfaceType::kSphere;
+    case GeomAbs_Torus:
+      return SurfaceType::kTorus;
+    case GeomAbs_BezierSurface:
+      return SurfaceType::kBezier;
+    case GeomAbs_BSplineSurface:
+      return SurfaceType::kBSpline;
+    case GeomAbs_SurfaceOfRevolution:
+      return SurfaceType::kRevolution;
+    case GeomAbs_SurfaceOfExtrusion:
+      return SurfaceType::kExtrusion;
+    case GeomAbs_OffsetSurface:
+      return SurfaceType::kOffset;
+    default:
+      return SurfaceType::kOther;
   }
 }
 
@@ -124,13 +134,14 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     if (f.triangles.empty()) return Failed(f, "no triangles survived");
     f.max_deviation = stats.max_deviation;
     f.status = FaceStatus::kOk;
-    if (stats.budget_hit) f.reason = "stopped at the per-face triangle cap";
+    if (stats.budget_hit)
+      f.reason = "stopped at the per-face triangle cap";
     else if (stats.max_violation > 1.0 + 1e-9)
       f.reason = "some triangles could not be refined to the criteria without folding";
   } catch (const Standard_Failure& e) {
     return Failed(f, std::string("OCCT: ") + (e.GetMessageString() && *e.GetMessageString()
-                                                   ? e.GetMessageString()
-                                                   : e.DynamicType()->Name()));
+                                                  ? e.GetMessageString()
+                                                  : e.DynamicType()->Name()));
   } catch (const std::exception& e) {
     return Failed(f, e.what());
   }
@@ -156,7 +167,8 @@ FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
     Status st = BuildFaceDomain(model, face_id, grids, *surface, &mine);
     std::unique_ptr<Surface> rep_surface = MakeFaceSurface(model.face(rep_id), false);
     if (st.ok()) st = BuildFaceDomain(model, rep_id, grids, *rep_surface, &theirs);
-    if (!st.ok() || mine.uv.size() != theirs.uv.size()) return Failed(f, "instance boundary differs");
+    if (!st.ok() || mine.uv.size() != theirs.uv.size())
+      return Failed(f, "instance boundary differs");
     const gp_Trsf& trsf = model.face_placement[face_id - 1];
     for (int i = 0; i < f.node_count(); ++i) {
       NodeRef& r = (*refs)[i];
@@ -176,7 +188,8 @@ FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
             if (theirs.ref[k].dim == 0 && theirs.ref[k].entity == r.entity) break;
         if (k == theirs.uv.size()) return Failed(f, "instance boundary node not found");
         r = mine.ref[k];
-        f.xyz[3 * i] = mine.xyz[k].x, f.xyz[3 * i + 1] = mine.xyz[k].y, f.xyz[3 * i + 2] = mine.xyz[k].z;
+        f.xyz[3 * i] = mine.xyz[k].x, f.xyz[3 * i + 1] = mine.xyz[k].y,
+                  f.xyz[3 * i + 2] = mine.xyz[k].z;
       }
       gp_Vec n(f.normals[3 * i], f.normals[3 * i + 1], f.normals[3 * i + 2]);
       n.Transform(trsf);
@@ -184,7 +197,8 @@ FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
       f.normals[3 * i] = n.X(), f.normals[3 * i + 1] = n.Y(), f.normals[3 * i + 2] = n.Z();
     }
     if (model.face_flipped[face_id - 1])
-      for (size_t t = 0; t + 2 < f.triangles.size(); t += 3) std::swap(f.triangles[t + 1], f.triangles[t + 2]);
+      for (size_t t = 0; t + 2 < f.triangles.size(); t += 3)
+        std::swap(f.triangles[t + 1], f.triangles[t + 2]);
   } catch (const Standard_Failure& e) {
     return Failed(f, std::string("OCCT: ") + e.DynamicType()->Name());
   }

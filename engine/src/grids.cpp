@@ -1,5 +1,8 @@
 #include "grids.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
 #include <Standard_Failure.hxx>
@@ -8,9 +11,6 @@
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <unordered_map>
 
 #include "edge_grid.h"
@@ -54,7 +54,8 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
       for (const TopoDS_Shape& f : *faces)
         if (!Developable(TopoDS::Face(f))) factor[e - 1] = gc.curved_face_factor;
   }
-  for (int e = 1; e <= ne; ++e) factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
+  for (int e = 1; e <= ne; ++e)
+    factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
 
   std::vector<std::string> errors(ne);
   auto build = [&](int e, bool params) {
@@ -88,7 +89,8 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
       g.xyz.clear();
       for (double t : g.t) g.xyz.push_back(curve ? curve->Point(t) : Vec3{});
     } catch (const Standard_Failure& ex) {
-      errors[e - 1] = std::string("edge ") + std::to_string(e) + ": OCCT " + ex.DynamicType()->Name();
+      errors[e - 1] =
+          std::string("edge ") + std::to_string(e) + ": OCCT " + ex.DynamicType()->Name();
       g.t.clear();
     }
   };

@@ -13,9 +13,12 @@ namespace {
 double QuadraticPeak(double h0, double h1, double h2, double peak[3]) {
   double A = 4 * h0, B = 4 * h1, C = 4 * h2;
   double best = std::max({std::fabs(h0), std::fabs(h1), std::fabs(h2)});
-  if (best == std::fabs(h0)) peak[0] = 0, peak[1] = 0.5, peak[2] = 0.5;
-  else if (best == std::fabs(h1)) peak[0] = 0.5, peak[1] = 0, peak[2] = 0.5;
-  else peak[0] = 0.5, peak[1] = 0.5, peak[2] = 0;
+  if (best == std::fabs(h0))
+    peak[0] = 0, peak[1] = 0.5, peak[2] = 0.5;
+  else if (best == std::fabs(h1))
+    peak[0] = 0.5, peak[1] = 0, peak[2] = 0.5;
+  else
+    peak[0] = 0.5, peak[1] = 0.5, peak[2] = 0;
   double det = 4 * B * C - (A - B - C) * (A - B - C);
   if (std::fabs(det) > 1e-300) {
     double b1 = B * (A - B + C) / det, b2 = C * (A + B - C) / det, b0 = 1 - b1 - b2;
@@ -104,7 +107,8 @@ TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
     double shortest = std::min({Dist(p[0], p[1]), Dist(p[1], p[2]), Dist(p[2], p[0])});
     if (shortest > 1e-12 * m.max_length) {
       dev = PointTriangleDistance(cen, p[0], p[1], p[2]);
-      for (int i = 0; i < 3; ++i) dev = std::max(dev, PointTriangleDistance(mid[i], p[0], p[1], p[2]));
+      for (int i = 0; i < 3; ++i)
+        dev = std::max(dev, PointTriangleDistance(mid[i], p[0], p[1], p[2]));
       m.rd = dev > 0 ? INFINITY : 0;
     }
   }
@@ -121,8 +125,8 @@ TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
 double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3]) {
   double o = Orient(uv[0], uv[1], uv[2]);
   Vec2 e0 = uv[1] - uv[0], e1 = uv[2] - uv[1], e2 = uv[0] - uv[2];
-  double l2 = std::max({e0.x * e0.x + e0.y * e0.y, e1.x * e1.x + e1.y * e1.y,
-                        e2.x * e2.x + e2.y * e2.y});
+  double l2 =
+      std::max({e0.x * e0.x + e0.y * e0.y, e1.x * e1.x + e1.y * e1.y, e2.x * e2.x + e2.y * e2.y});
   if (!(o > 1e-12 * l2)) return kInvalid;
   Vec3 n = Cross(p[1] - p[0], p[2] - p[0]);
   double len2 = std::max({Dot(p[1] - p[0], p[1] - p[0]), Dot(p[2] - p[1], p[2] - p[1]),

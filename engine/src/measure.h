@@ -10,10 +10,10 @@ namespace rdmesh {
 
 /// The stop criteria of face refinement; a 0 turns a criterion off.
 struct FaceCriteria {
-  double max_deviation = 0;  ///< model units
-  double rd_tolerance = 0;   ///< triangle RD (A_S - A_T) / A_T
-  double max_length = 0;     ///< longest 3D edge, model units
-  double min_length = 0;     ///< never split a triangle whose longest edge is below 2x this
+  double max_deviation = 0;     ///< model units
+  double rd_tolerance = 0;      ///< triangle RD (A_S - A_T) / A_T
+  double max_length = 0;        ///< longest 3D edge, model units
+  double min_length = 0;        ///< never split a triangle whose longest edge is below 2x this
   double min_normal_cos = 0.5;  ///< a triangle's normal must lie within acos(this) of its
                                 ///< corners' surface normals (fold guard)
 };

@@ -8,7 +8,6 @@
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
 #include <gp_Trsf.hxx>
-
 #include <string>
 #include <vector>
 

@@ -24,8 +24,10 @@ void WorkMesh::MeasureCorners(const std::array<int, 3>& t, Vec2 q[3], Vec3 x[3])
     if (axis < 0) continue;
     const Vec2 &a = uv[t[(i + 1) % 3]], &b = uv[t[(i + 2) % 3]];
     if (pole_axis[t[(i + 1) % 3]] >= 0 || pole_axis[t[(i + 2) % 3]] >= 0) continue;
-    if (axis == 0) q[i].x = 0.5 * (a.x + b.x);
-    else q[i].y = 0.5 * (a.y + b.y);
+    if (axis == 0)
+      q[i].x = 0.5 * (a.x + b.x);
+    else
+      q[i].y = 0.5 * (a.y + b.y);
   }
 }
 
@@ -152,8 +154,7 @@ std::vector<int> ReplaceCavity(WorkMesh* m, const std::vector<int>& old_tris,
   // Link the new triangles to each other and to the border.
   std::map<std::pair<int, int>, std::pair<int, int>> inner;
   for (int id : ids)
-    for (int i = 0; i < 3; ++i)
-      inner[{m->tri[id][(i + 1) % 3], m->tri[id][(i + 2) % 3]}] = {id, i};
+    for (int i = 0; i < 3; ++i) inner[{m->tri[id][(i + 1) % 3], m->tri[id][(i + 2) % 3]}] = {id, i};
   for (int id : ids) {
     for (int i = 0; i < 3; ++i) {
       int a = m->tri[id][(i + 1) % 3], b = m->tri[id][(i + 2) % 3];
@@ -167,8 +168,8 @@ std::vector<int> ReplaceCavity(WorkMesh* m, const std::vector<int>& old_tris,
       auto out = border.find({a, b});
       if (out == border.end()) {  // a new piece of a pole edge (RebuildPoleFan)
         m->nbr[id][i] = -1;
-        m->kind[id][i] = m->pole_axis[a] >= 0 && m->pole_axis[b] >= 0 ? EdgeKind::kSplittable
-                                                                      : EdgeKind::kFixed;
+        m->kind[id][i] =
+            m->pole_axis[a] >= 0 && m->pole_axis[b] >= 0 ? EdgeKind::kSplittable : EdgeKind::kFixed;
         continue;
       }
       m->nbr[id][i] = out->second.outside;
@@ -247,7 +248,8 @@ bool PoleFanTris(WorkMesh* m, int p, std::vector<int>* cavity, std::vector<Tri>*
     if (!prev.count(a)) start = a;
   if (start < 0) return false;
   std::vector<int> chain = {start};
-  while (next.count(chain.back()) && chain.size() <= cavity->size()) chain.push_back(next[chain.back()]);
+  while (next.count(chain.back()) && chain.size() <= cavity->size())
+    chain.push_back(next[chain.back()]);
   if (chain.size() != cavity->size() + 1) return false;
   const bool has_start = m->pole_axis[chain.front()] >= 0;
   const bool has_end = m->pole_axis[chain.back()] >= 0;

@@ -21,12 +21,12 @@ enum class EdgeKind : uint8_t {
 
 struct WorkMesh {
   // Nodes.
-  std::vector<Vec2> uv;       ///< surface parameters
-  std::vector<Vec3> xyz;      ///< world point
-  std::vector<Vec3> normal;   ///< unit surface normal Su x Sv at the node
-  std::vector<uint8_t> fixed; ///< 1 = boundary node: never moves, never goes away
-  std::vector<NodeRef> ref;   ///< B-rep classification
-  std::vector<int> node_tri;  ///< one alive triangle incident to the node (-1 = none)
+  std::vector<Vec2> uv;        ///< surface parameters
+  std::vector<Vec3> xyz;       ///< world point
+  std::vector<Vec3> normal;    ///< unit surface normal Su x Sv at the node
+  std::vector<uint8_t> fixed;  ///< 1 = boundary node: never moves, never goes away
+  std::vector<NodeRef> ref;    ///< B-rep classification
+  std::vector<int> node_tri;   ///< one alive triangle incident to the node (-1 = none)
   /// Nodes on a degenerate (pole) edge: which parameter runs along that edge (0 = u, 1 = v);
   /// -1 for other nodes. A pole is one 3D point, so its parameter along the edge is arbitrary.
   std::vector<int8_t> pole_axis;
@@ -76,8 +76,7 @@ void SplitEdgeTris(const WorkMesh& mesh, int t, int i, int n, std::vector<int>* 
                    std::vector<Tri>* tris);
 /// The two triangles that replace t and its neighbour across edge i when that edge is flipped.
 /// False when there is no neighbour.
-bool FlipTris(const WorkMesh& mesh, int t, int i, std::vector<int>* cavity,
-              std::vector<Tri>* tris);
+bool FlipTris(const WorkMesh& mesh, int t, int i, std::vector<int>* cavity, std::vector<Tri>* tris);
 /// The triangles around v after collapsing v into its neighbour w (the two triangles on the
 /// edge v-w disappear).
 void CollapseTris(const WorkMesh& mesh, int v, int w, std::vector<int>* cavity,

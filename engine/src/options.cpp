@@ -1,14 +1,12 @@
+#include "rdmesh/options.h"
+
 #include <cmath>
 #include <string>
-
-#include "rdmesh/options.h"
 
 namespace rdmesh {
 
 namespace {
-Status Invalid(const std::string& message) {
-  return Status(StatusCode::kInvalidArgument, message);
-}
+Status Invalid(const std::string& message) { return Status(StatusCode::kInvalidArgument, message); }
 bool Finite(double x) { return std::isfinite(x); }
 }  // namespace
 
@@ -36,8 +34,9 @@ Status ValidateOptions(const MeshOptions& o) {
     if (id < 1) return Invalid("face ids start at 1");
   if (o.max_deviation == 0 && o.max_deviation_rel == 0 && o.rd_tolerance == 0 &&
       o.max_edge_length == 0 && o.max_triangles == 0)
-    return Invalid("no stop criterion: set a max deviation, an RD tolerance, a max edge length "
-                   "or a triangle budget");
+    return Invalid(
+        "no stop criterion: set a max deviation, an RD tolerance, a max edge length "
+        "or a triangle budget");
   return Status::Ok();
 }
 

@@ -172,8 +172,8 @@ class Refiner {
   std::vector<TriangleMeasure> measure_;
   std::vector<uint32_t> stamp_;
   bool refining_ = false;
-  bool splitting_ = false;     // Apply() is applying a split
-  std::vector<uint8_t> gen_;   // per triangle: split generation
+  bool splitting_ = false;    // Apply() is applying a split
+  std::vector<uint8_t> gen_;  // per triangle: split generation
   bool sliver_recursion_ = false;
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
 };
@@ -268,10 +268,12 @@ bool Refiner::SplitTriangle(int t) {
   // carry the deviation, so bisect the longest one (Rivara) when it may be split.
   {
     double l2[3], sum = 0;
-    for (int i = 0; i < 3; ++i) l2[i] = Dot(p[(i + 1) % 3] - p[(i + 2) % 3], p[(i + 1) % 3] - p[(i + 2) % 3]), sum += l2[i];
+    for (int i = 0; i < 3; ++i)
+      l2[i] = Dot(p[(i + 1) % 3] - p[(i + 2) % 3], p[(i + 1) % 3] - p[(i + 2) % 3]), sum += l2[i];
     double quality = sum > 0 ? 4 * std::sqrt(3.0) * Area(p[0], p[1], p[2]) / sum : 1;
     int longest = static_cast<int>(std::max_element(l2, l2 + 3) - l2);
-    if (quality < kSliverQuality && m_.pole_axis[tri[0]] + m_.pole_axis[tri[1]] + m_.pole_axis[tri[2]] == -3 &&
+    if (quality < kSliverQuality &&
+        m_.pole_axis[tri[0]] + m_.pole_axis[tri[1]] + m_.pole_axis[tri[2]] == -3 &&
         m_.kind[t][longest] != EdgeKind::kFixed) {
       if (SplitEdge(t, longest)) return true;
       // The neighbour across the long edge blocks it (the split would fold it): refine the
@@ -378,8 +380,8 @@ bool Refiner::SplitEdge(int t, int i) {
     // parameter line (a meridian on a sphere).
     double du = m_.uv[c].x - m_.uv[b].x, dv = m_.uv[c].y - m_.uv[b].y;
     Vec2 apex = m_.uv[m_.tri[t][i]];
-    double along = (std::fabs(du) >= std::fabs(dv)) ? (apex.x - m_.uv[b].x) / du
-                                                    : (apex.y - m_.uv[b].y) / dv;
+    double along =
+        (std::fabs(du) >= std::fabs(dv)) ? (apex.x - m_.uv[b].x) / du : (apex.y - m_.uv[b].y) / dv;
     s_best = std::clamp(std::isfinite(along) ? along : 0.5, 0.2, 0.8);
   }
   int node = pole ? NewNode(place(s_best), true, b) : NewNode(place(s_best));
@@ -410,7 +412,8 @@ bool Refiner::TryFlip(int t, int i) {
   if (!better && cand.max_violation <= old_score * (1 + 1e-12) && old_score == 0) {
     // Ties (no criterion bites, e.g. planar): the larger 3D area, else keep.
     double old_area = 0, new_area = 0;
-    for (int x : cavity) old_area += Area(m_.xyz[m_.tri[x][0]], m_.xyz[m_.tri[x][1]], m_.xyz[m_.tri[x][2]]);
+    for (int x : cavity)
+      old_area += Area(m_.xyz[m_.tri[x][0]], m_.xyz[m_.tri[x][1]], m_.xyz[m_.tri[x][2]]);
     for (const Tri& nt : tris) new_area += Area(m_.xyz[nt[0]], m_.xyz[nt[1]], m_.xyz[nt[2]]);
     better = new_area > old_area * (1 + 1e-9);
   }

@@ -5,10 +5,9 @@
 //
 // Evaluators cache state (OCCT adaptors do): one instance per thread.
 
-#include <memory>
-
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <memory>
 
 #include "geom.h"
 

@@ -68,8 +68,8 @@ struct AnalyticFace {
 /// Meshes the rectangle [u0,u1]x[v0,v1] of `surface`. Sides flagged `pole` are degenerate
 /// (splittable) edges; sides flagged `seam_pair` share their points (u0 and u1 sides of a
 /// closed surface). Edge grids come from DiscretizeCurve with `edge` criteria.
-inline void MeshRectangle(AnalyticFace* f, double u0, double u1, double v0, double v1,
-                          bool poles, const EdgeGridCriteria& edge, const FaceCriteria& face,
+inline void MeshRectangle(AnalyticFace* f, double u0, double u1, double v0, double v1, bool poles,
+                          const EdgeGridCriteria& edge, const FaceCriteria& face,
                           bool improve = true, int64_t max_triangles = 200000) {
   Surface& s = *f->surface;
   s.umin = u0, s.umax = u1, s.vmin = v0, s.vmax = v1;
@@ -93,7 +93,9 @@ inline void MeshRectangle(AnalyticFace* f, double u0, double u1, double v0, doub
     }
   }
   segments.back()[1] = 0;
-  if (poles) splittable.back()[1] = splittable.back()[1] >= static_cast<int>(uv.size()) ? 0 : splittable.back()[1];
+  if (poles)
+    splittable.back()[1] =
+        splittable.back()[1] >= static_cast<int>(uv.size()) ? 0 : splittable.back()[1];
   // Scale for isotropy: mean |Su|, |Sv| at the centre.
   Vec2 c = 0.5 * (corners[0] + corners[2]);
   double h = 1e-6;

@@ -9,7 +9,6 @@
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
 #include <BRepTools.hxx>
-
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -70,7 +69,8 @@ int Inverted(const MeshResult& r) {
       auto a = p(0), b = p(1), c = p(2);
       double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
       double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                     u[0] * v[1] - u[1] * v[0]};
       double dot = 0;
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) dot += n[j] * f.normals[3 * t[i] + j];

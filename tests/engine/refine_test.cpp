@@ -22,7 +22,8 @@ TEST(RefineTest, PlaneGetsNoInteriorNodes) {
   // Seeds are only placed on curved faces by the face mesher; here the fixture adds them, and
   // the improvement loop must remove every one: a plane needs no interior node.
   int interior = 0;
-  for (int v = 0; v < f.mesh.node_count(); ++v) interior += !f.mesh.fixed[v] && f.mesh.node_tri[v] >= 0;
+  for (int v = 0; v < f.mesh.node_count(); ++v)
+    interior += !f.mesh.fixed[v] && f.mesh.node_tri[v] >= 0;
   EXPECT_EQ(interior, 0);
   EXPECT_EQ(f.OutputTriangles(), 2);
 }
@@ -36,7 +37,8 @@ TEST(RefineTest, PlaneWithMaxLengthGetsInteriorNodes) {
   face.max_length = 0.25;
   MeshRectangle(&f, 0, 1, 0, 1, false, edge, face);
   int interior = 0;
-  for (int v = 0; v < f.mesh.node_count(); ++v) interior += !f.mesh.fixed[v] && f.mesh.node_tri[v] >= 0;
+  for (int v = 0; v < f.mesh.node_count(); ++v)
+    interior += !f.mesh.fixed[v] && f.mesh.node_tri[v] >= 0;
   EXPECT_GT(interior, 0);
   EXPECT_LE(f.stats.max_violation, 1.0);
 }
@@ -73,11 +75,12 @@ TEST(RefineTest, SphereNearTheoreticalMinimum) {
   MeshRectangle(&f, 0, 2 * M_PI, -M_PI / 2, M_PI / 2, true, edge, face);
   const double optimum = 2 * 2.418 / delta;
   double measured = f.MeasuredDeviation([](Vec3 p) { return std::fabs(Norm(p) - 1.0); });
-  std::printf("sphere: %d triangles (%.3fx optimum %.0f), deviation %.3e (asked %.3e); "
-              "splits %ld edge splits %ld flips %ld collapses %ld moves %ld violation %.3f\n",
-              f.OutputTriangles(), f.OutputTriangles() / optimum, optimum, measured, delta,
-              (long)f.stats.splits, (long)f.stats.edge_splits, (long)f.stats.flips,
-              (long)f.stats.collapses, (long)f.stats.moves, f.stats.max_violation);
+  std::printf(
+      "sphere: %d triangles (%.3fx optimum %.0f), deviation %.3e (asked %.3e); "
+      "splits %ld edge splits %ld flips %ld collapses %ld moves %ld violation %.3f\n",
+      f.OutputTriangles(), f.OutputTriangles() / optimum, optimum, measured, delta,
+      (long)f.stats.splits, (long)f.stats.edge_splits, (long)f.stats.flips, (long)f.stats.collapses,
+      (long)f.stats.moves, f.stats.max_violation);
   EXPECT_GE(f.OutputTriangles(), optimum);
   EXPECT_LE(f.OutputTriangles(), 1.4 * optimum);
   EXPECT_LE(measured, 1.2 * delta);

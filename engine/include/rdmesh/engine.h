@@ -17,22 +17,22 @@ class Model;  // opaque: the loaded B-rep (engine/src/model.h)
 
 /// What a model holds, for `rdmesh info` and the service's ModelInfo.
 struct ModelInfo {
-  std::string name;           ///< file name, or the name given at upload
-  std::string format;         ///< "step", "iges" or "brep"
-  std::string length_unit;    ///< the file's own length unit, e.g. "mm", "inch"
-  double unit_scale_mm = 1.0; ///< how many mm one file unit is (coordinates are always in mm)
-  int faces = 0;              ///< face ids 1..faces
-  int edges = 0;              ///< edge ids 1..edges
+  std::string name;            ///< file name, or the name given at upload
+  std::string format;          ///< "step", "iges" or "brep"
+  std::string length_unit;     ///< the file's own length unit, e.g. "mm", "inch"
+  double unit_scale_mm = 1.0;  ///< how many mm one file unit is (coordinates are always in mm)
+  int faces = 0;               ///< face ids 1..faces
+  int edges = 0;               ///< edge ids 1..edges
   int vertices = 0;
   int solids = 0;
   int shells = 0;
-  int unique_faces = 0;       ///< faces after instancing (each meshed once)
-  int instances = 0;          ///< placed part instances
-  std::array<double, 6> bbox{};  ///< xmin ymin zmin xmax ymax zmax, model units
-  double diagonal = 0.0;         ///< bbox diagonal, model units
+  int unique_faces = 0;                      ///< faces after instancing (each meshed once)
+  int instances = 0;                         ///< placed part instances
+  std::array<double, 6> bbox{};              ///< xmin ymin zmin xmax ymax zmax, model units
+  double diagonal = 0.0;                     ///< bbox diagonal, model units
   std::map<std::string, int> surface_types;  ///< SurfaceTypeName -> face count
   std::vector<std::string> part_names;       ///< names of the parts (XCAF labels)
-  bool closed = false;        ///< every edge bounds exactly two faces (seams aside)
+  bool closed = false;                       ///< every edge bounds exactly two faces (seams aside)
 };
 
 /// Model file formats.
@@ -45,8 +45,7 @@ Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context*
 
 /// Loads a model from bytes in memory. `name` is used in messages and ModelInfo.
 Result<std::shared_ptr<const Model>> LoadModelFromBytes(const std::string& bytes,
-                                                        ModelFormat format,
-                                                        const std::string& name,
+                                                        ModelFormat format, const std::string& name,
                                                         Context* context = nullptr);
 
 /// Summary of a loaded model.

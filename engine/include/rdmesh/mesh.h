@@ -39,11 +39,11 @@ struct FaceMesh {
   FaceStatus status = FaceStatus::kSkipped;
   std::string reason;  ///< why the face failed or was skipped; empty when ok
 
-  std::vector<double> xyz;        ///< 3 per node: x y z, model units, world frame
-  std::vector<double> uv;         ///< 2 per node: u v, the face surface's own parameters
-  std::vector<double> normals;    ///< 3 per node: unit outward normal of the face at the node
-  std::vector<int32_t> triangles; ///< 3 per triangle: 0-based node ids, counter-clockwise seen
-                                  ///< from outside (right-handed with the outward normal)
+  std::vector<double> xyz;          ///< 3 per node: x y z, model units, world frame
+  std::vector<double> uv;           ///< 2 per node: u v, the face surface's own parameters
+  std::vector<double> normals;      ///< 3 per node: unit outward normal of the face at the node
+  std::vector<int32_t> triangles;   ///< 3 per triangle: 0-based node ids, counter-clockwise seen
+                                    ///< from outside (right-handed with the outward normal)
   std::vector<int64_t> global_ids;  ///< 1 per node: 0-based node id in the assembled Mesh
 
   double max_deviation = 0.0;  ///< estimated largest mesh-surface distance, model units
@@ -57,8 +57,8 @@ struct FaceMesh {
 
 /// The whole model as one watertight triangle mesh: boundary nodes are shared between faces.
 struct Mesh {
-  std::vector<double> xyz;         ///< 3 per node, model units, world frame
-  std::vector<int32_t> triangles;  ///< 3 per triangle, 0-based node ids, outward orientation
+  std::vector<double> xyz;             ///< 3 per node, model units, world frame
+  std::vector<int32_t> triangles;      ///< 3 per triangle, 0-based node ids, outward orientation
   std::vector<int32_t> triangle_face;  ///< 1 per triangle: the B-rep face id (1..F)
   /// Where each node lies on the B-rep: 0 = vertex, 1 = edge, 2 = face interior.
   std::vector<int8_t> node_dim;
