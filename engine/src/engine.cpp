@@ -105,6 +105,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   if (context && context->ShouldStop()) return context->StopStatus();
   // Instanced copies reuse their representative's mesh.
   for (int f = 1; f <= nf; ++f) {
+    if ((f & 63) == 0 && context && context->ShouldStop()) return context->StopStatus();
     FaceMesh& slot = result.faces[f - 1];
     int rep = model.face_representative[f - 1];
     if (!wanted[f - 1]) {

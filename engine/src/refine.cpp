@@ -610,7 +610,10 @@ bool Refiner::SmoothNode(int v) {
 
 int Refiner::SmoothPass() {
   int count = 0;
-  for (int v = 0; v < m_.node_count(); ++v) count += SmoothNode(v);
+  for (int v = 0; v < m_.node_count(); ++v) {
+    if ((v & 255) == 255 && ctx_ && ctx_->ShouldStop()) break;
+    count += SmoothNode(v);
+  }
   return count;
 }
 
