@@ -17,7 +17,7 @@ constexpr double kMinWeight = 0.04;
 constexpr double kEdgeWeight = 0.12;
 // A triangle that descends from this many splits and still violates is not split again: a
 // safety net against refinement that makes no progress (sizes shrink ~3x a generation).
-constexpr int kMaxGeneration = 40;
+constexpr int kMaxGeneration = 24;
 // Splits of standing triangles may fold children only in the first generations.
 constexpr int kFoldingGenerations = 6;
 // The violation given to a folded triangle.
@@ -126,7 +126,7 @@ class Refiner {
     // Generation: how many splits a triangle descends from (flips and collapses keep it).
     int gen = 0;
     for (int t : cavity) gen = std::max(gen, static_cast<int>(gen_[t]));
-    if (splitting_) gen = std::min(gen + 1, 255);
+    if (splitting_ && tris.size() > cavity.size()) gen = std::min(gen + 1, 255);
     std::vector<int> ids = ReplaceCavity(&m_, cavity, tris);
     if (measure_.size() < m_.tri.size()) {
       measure_.resize(m_.tri.size());
