@@ -19,7 +19,7 @@ constexpr double kEdgeWeight = 0.12;
 // safety net against refinement that makes no progress (sizes shrink ~3x a generation).
 constexpr int kMaxGeneration = 24;
 // Splits of standing triangles may fold children only in the first generations.
-constexpr int kFoldingGenerations = 6;
+constexpr int kFoldingGenerations = 1;
 // The violation given to a folded triangle.
 constexpr double kFoldViolation = 4.0;
 // Below this shape quality (1 = equilateral) a triangle to refine is a sliver.
