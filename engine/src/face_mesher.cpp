@@ -1,6 +1,5 @@
 #include "face_mesher.h"
 
-#include <BRepAdaptor_Surface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopoDS.hxx>
 #include <chrono>
@@ -8,6 +7,7 @@
 
 #include "cdt.h"
 #include "model.h"
+#include "model_info.h"
 #include "operations.h"
 #include "refine.h"
 #include "surface.h"
@@ -15,33 +15,6 @@
 namespace rdmesh {
 
 namespace {
-
-SurfaceType TypeOf(const TopoDS_Face& face) {
-  switch (BRepAdaptor_Surface(face, Standard_False).GetType()) {
-    case GeomAbs_Plane:
-      return SurfaceType::kPlane;
-    case GeomAbs_Cylinder:
-      return SurfaceType::kCylinder;
-    case GeomAbs_Cone:
-      return SurfaceType::kCone;
-    case GeomAbs_Sphere:
-      return SurfaceType::kSphere;
-    case GeomAbs_Torus:
-      return SurfaceType::kTorus;
-    case GeomAbs_BezierSurface:
-      return SurfaceType::kBezier;
-    case GeomAbs_BSplineSurface:
-      return SurfaceType::kBSpline;
-    case GeomAbs_SurfaceOfRevolution:
-      return SurfaceType::kRevolution;
-    case GeomAbs_SurfaceOfExtrusion:
-      return SurfaceType::kExtrusion;
-    case GeomAbs_OffsetSurface:
-      return SurfaceType::kOffset;
-    default:
-      return SurfaceType::kOther;
-  }
-}
 
 FaceMesh Failed(FaceMesh f, const std::string& reason) {
   f.status = FaceStatus::kFailed;
@@ -98,7 +71,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
   refs->clear();
   try {
     const TopoDS_Face& face = model.face(face_id);
-    f.surface_type = TypeOf(face);
+    f.surface_type = FaceSurfaceType(face);
     std::unique_ptr<Surface> surface = MakeFaceSurface(face, job.nurbs);
     FaceDomain domain;
     Status st = BuildFaceDomain(model, face_id, grids, *surface, &domain);

@@ -3,7 +3,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
@@ -15,6 +14,7 @@
 
 #include "edge_grid.h"
 #include "model.h"
+#include "model_info.h"
 #include "surface.h"
 
 namespace rdmesh {
@@ -22,15 +22,9 @@ namespace rdmesh {
 namespace {
 
 bool Developable(const TopoDS_Face& face) {
-  switch (BRepAdaptor_Surface(face, Standard_False).GetType()) {
-    case GeomAbs_Plane:
-    case GeomAbs_Cylinder:
-    case GeomAbs_Cone:
-    case GeomAbs_SurfaceOfExtrusion:
-      return true;
-    default:
-      return false;
-  }
+  SurfaceType type = FaceSurfaceType(face);
+  return type == SurfaceType::kPlane || type == SurfaceType::kCylinder ||
+         type == SurfaceType::kCone || type == SurfaceType::kExtrusion;
 }
 
 }  // namespace
@@ -57,7 +51,6 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
   for (int e = 1; e <= ne; ++e)
     factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
 
-  std::vector<std::string> errors(ne);
   auto build = [&](int e, bool params) {
     if (!edge_needed.empty() && !edge_needed[e - 1] && !params) return;
     EdgeGrid& g = (*grids)[e - 1];
@@ -88,10 +81,8 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
       }
       g.xyz.clear();
       for (double t : g.t) g.xyz.push_back(curve ? curve->Point(t) : Vec3{});
-    } catch (const Standard_Failure& ex) {
-      errors[e - 1] =
-          std::string("edge ") + std::to_string(e) + ": OCCT " + ex.DynamicType()->Name();
-      g.t.clear();
+    } catch (const Standard_Failure&) {
+      g.t.clear();  // the faces on this edge fail with "edge N has no grid"
     }
   };
   std::vector<int> sources, copies;

@@ -21,10 +21,8 @@
 
 namespace rdmesh {
 
-namespace {
-
-SurfaceType ToSurfaceType(GeomAbs_SurfaceType type) {
-  switch (type) {
+SurfaceType FaceSurfaceType(const TopoDS_Face& face) {
+  switch (BRepAdaptor_Surface(face, Standard_False).GetType()) {
     case GeomAbs_Plane:
       return SurfaceType::kPlane;
     case GeomAbs_Cylinder:
@@ -49,6 +47,8 @@ SurfaceType ToSurfaceType(GeomAbs_SurfaceType type) {
       return SurfaceType::kOther;
   }
 }
+
+namespace {
 
 int CountShapes(const TopoDS_Shape& shape, TopAbs_ShapeEnum type) {
   TopTools_IndexedMapOfShape map;
@@ -141,7 +141,7 @@ ModelInfo ComputeModelInfo(const Model& model) {
     int rep = model.face_representative[id - 1];
     if (rep == id) {
       ++info.unique_faces;
-      types[id - 1] = ToSurfaceType(BRepAdaptor_Surface(model.face(id), false).GetType());
+      types[id - 1] = FaceSurfaceType(model.face(id));
     } else {
       types[id - 1] = types[rep - 1];
     }

@@ -10,4 +10,7 @@ namespace rdmesh {
 /// length unit to the caller. May throw Standard_Failure on broken topology.
 ModelInfo ComputeModelInfo(const Model& model);
 
+/// The kind of a face's surface (from OCCT's GeomAbs type).
+SurfaceType FaceSurfaceType(const TopoDS_Face& face);
+
 }  // namespace rdmesh

@@ -34,7 +34,8 @@ void WorkMesh::MeasureCorners(const std::array<int, 3>& t, Vec2 q[3], Vec3 x[3])
 void WorkMesh::MeasureCorners(int t, Vec2 q[3], Vec3 x[3]) const { MeasureCorners(tri[t], q, x); }
 
 int WorkMesh::TriangleCount() const {
-  return static_cast<int>(std::count(alive.begin(), alive.end(), 1));
+  // Every dead slot is in free_slots (ReplaceCavity keeps it so).
+  return static_cast<int>(tri.size() - free_slots.size());
 }
 
 int WorkMesh::CornerOf(int t, int v) const {

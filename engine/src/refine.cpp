@@ -117,10 +117,6 @@ class Refiner {
     m_.uv.pop_back(), m_.xyz.pop_back(), m_.normal.pop_back(), m_.fixed.pop_back();
     m_.ref.pop_back(), m_.node_tri.pop_back(), m_.pole_axis.pop_back();
   }
-  void ReplaceCavityBack(const std::vector<int>& ids, const std::vector<Tri>& tris,
-                         const Candidate& cand) {
-    Apply(ids, tris, cand);
-  }
   std::vector<int> Apply(const std::vector<int>& cavity, const std::vector<Tri>& tris,
                          const Candidate& cand) {
     // Generation: how many splits a triangle descends from (flips and collapses keep it).
@@ -193,25 +189,21 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
     if (measure_[t].violation > 1) Push(t);
   }
   int64_t ops = 0;
-  int64_t live = m_.TriangleCount();
   while (!queue_.empty()) {
     auto [violation, t, stamp] = queue_.top();
     queue_.pop();
     if (!m_.alive[t] || stamp != stamp_[t]) continue;
     if (violation <= 1) break;
-    if (live >= max_triangles) {
+    if (m_.TriangleCount() >= max_triangles) {
       stats_.budget_hit = true;
       break;
     }
     if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
-    if (gen_[t] >= kMaxGeneration) {
-      stats_.stuck = true;  // refinement makes no progress here: leave it, report it
-      continue;
-    }
+    // No progress here: leave it; Finish() reports it through max_violation.
+    if (gen_[t] >= kMaxGeneration) continue;
     splitting_ = true;
-    bool split = SplitTriangle(t);
+    SplitTriangle(t);
     splitting_ = false;
-    if (split) live = static_cast<int64_t>(m_.tri.size() - m_.free_slots.size());
   }
   refining_ = false;
   queue_ = {};
@@ -510,7 +502,7 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   for (size_t k = 0; k < region.size(); ++k) measure_[region[k]] = region_measures[k];
   Candidate back;
   back.measures = old_measures;
-  ReplaceCavityBack(ids, old_tris, back);
+  Apply(ids, old_tris, back);  // undo the collapse
   return false;
 }
 

@@ -26,7 +26,6 @@ struct RefineStats {
   int64_t collapses = 0;
   int64_t moves = 0;
   bool budget_hit = false;   ///< stopped at the triangle cap
-  bool stuck = false;        ///< some triangles made no progress and were left
   double max_violation = 0;  ///< worst triangle afterwards (<= 1: all criteria met)
   double max_deviation = 0;  ///< worst estimated deviation afterwards, model units
 };
