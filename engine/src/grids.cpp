@@ -27,6 +27,43 @@ bool Developable(const TopoDS_Face& face) {
          type == SurfaceType::kCone || type == SurfaceType::kExtrusion;
 }
 
+// Polyline samples that decide whether an edge is shorter than its tolerance.
+constexpr int kLengthSamples = 8;
+
+// The two vertices of a collapsed (non-degenerate, shorter than tolerance) edge are one node:
+// every grid names the smallest vertex id of its group and takes that vertex's point, so all
+// faces share one node there and triangles across the collapsed edge vanish.
+void MergeCollapsedEdgeVertices(const Model& model, std::vector<EdgeGrid>* grids) {
+  const int nv = model.vertices.Extent();
+  std::vector<int> parent(nv + 1);
+  for (int v = 0; v <= nv; ++v) parent[v] = v;
+  auto find = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  bool any = false;
+  for (int e = 1; e <= model.edge_count(); ++e) {
+    const EdgeGrid& g = (*grids)[e - 1];
+    if (!g.degenerate || g.first_vertex == g.last_vertex || BRep_Tool::Degenerated(model.edge(e)))
+      continue;
+    int a = find(g.first_vertex), b = find(g.last_vertex);
+    if (a == b) continue;
+    parent[std::max(a, b)] = std::min(a, b);
+    any = true;
+  }
+  if (!any) return;
+  for (EdgeGrid& g : *grids) {
+    if (g.t.empty()) continue;
+    g.first_vertex = find(g.first_vertex);
+    g.last_vertex = find(g.last_vertex);
+    auto point = [&](int v) {
+      gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(model.vertices(v)));
+      return Vec3{p.X(), p.Y(), p.Z()};
+    };
+    if (!g.xyz.empty()) g.xyz.front() = point(g.first_vertex), g.xyz.back() = point(g.last_vertex);
+  }
+}
+
 }  // namespace
 
 Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
@@ -73,8 +110,22 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
           c.rd_tolerance = gc.rd_tolerance;
           c.max_length = gc.max_length;
           c.min_length = std::max(gc.min_length, BRep_Tool::Tolerance(edge));
-          c.min_segments = g.first_vertex == g.last_vertex ? 3 : 1;
+          // A closed edge, or one whose ends nearly meet, starts from three segments: its
+          // end-to-end chord says nothing about its length.
+          Vec3 start = curve->Point(f), end = curve->Point(l), mid = curve->Point(0.5 * (f + l));
+          bool loops = g.first_vertex == g.last_vertex || Dist(start, end) < 0.5 * Dist(start, mid);
+          c.min_segments = loops ? 3 : 1;
           g.t = DiscretizeCurve(*curve, f, l, c);
+          // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
+          // and faces see it as a pole segment (its pcurve may still span the face).
+          double length = 0;
+          Vec3 prev = curve->Point(f);
+          for (int k = 1; k <= kLengthSamples; ++k) {
+            Vec3 x = curve->Point(f + (l - f) * k / kLengthSamples);
+            length += Dist(prev, x);
+            prev = x;
+          }
+          if (length <= BRep_Tool::Tolerance(edge)) g.t = {f, l}, g.degenerate = true;
         }
       } else {
         g.t = (*grids)[source[e - 1] - 1].t;
@@ -96,6 +147,7 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
     tbb::parallel_for(0, static_cast<int>(copies.size()), [&](int i) { build(copies[i], false); });
   });
   if (context && context->ShouldStop()) return context->StopStatus();
+  MergeCollapsedEdgeVertices(model, grids);
   return Status::Ok();
 }
 
