@@ -5,12 +5,21 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <BRepBuilderAPI_MakeEdge.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
 #include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <GC_MakeCircle.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
 #include <cmath>
 #include <filesystem>
+#include <gp_Circ.hxx>
 #include <map>
 #include <string>
 
@@ -122,6 +131,49 @@ TEST(PipelineTest, TorusWatertightWithinDeviation) {
   EXPECT_EQ(OpenAndNonManifoldEdges(r.mesh), std::make_pair(0, 0));
   EXPECT_EQ(Inverted(r), 0);
   EXPECT_LE(r.summary.estimated_deviation, 1.2e-3 * GetModelInfo(*model).diagonal);
+}
+
+TEST(PipelineTest, ConeApexTrianglesFaceOutward) {
+  // Whole and half cones: the surface normal at the apex depends on the direction it is
+  // approached from, which must not make the fold guard accept inverted apex triangles.
+  for (double angle : {2 * M_PI, M_PI}) {
+    auto model = LoadShape(BRepPrimAPI_MakeCone(1.0, 0.0, 1.7, angle).Shape(), "cone");
+    ASSERT_TRUE(model);
+    MeshResult r = MeshOrDie(*model, MeshOptions());
+    EXPECT_EQ(r.summary.faces_failed, 0);
+    EXPECT_EQ(OpenAndNonManifoldEdges(r.mesh), std::make_pair(0, 0));
+    EXPECT_EQ(Inverted(r), 0) << "angle " << angle;
+    EXPECT_LE(r.summary.estimated_deviation, 1.2e-3 * GetModelInfo(*model).diagonal);
+  }
+}
+
+TEST(PipelineTest, ArcWhoseEndsNearlyMeetIsDiscretised) {
+  // A disk bounded by a circular arc of radius 10 that stops 1e-5 short of closing and a
+  // 1e-5 line that closes it, with a tolerance of 1e-4 on both edges. The arc's end-to-end chord
+  // is below its tolerance, but the arc is 63 long; the line is a point.
+  const double radius = 10, gap = 1e-5 / radius;
+  gp_Circ circle(gp::XOY(), radius);
+  TopoDS_Edge arc = BRepBuilderAPI_MakeEdge(circle, 0.0, 2 * M_PI - gap);
+  TopoDS_Edge line = BRepBuilderAPI_MakeEdge(
+      gp_Pnt(radius * std::cos(-gap), radius * std::sin(-gap), 0), gp_Pnt(radius, 0, 0));
+  BRepBuilderAPI_MakeWire wire(arc, line);
+  ASSERT_TRUE(wire.IsDone());
+  TopoDS_Face face = BRepBuilderAPI_MakeFace(wire.Wire(), true);
+  BRep_Builder builder;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next())
+    builder.UpdateEdge(TopoDS::Edge(ex.Current()), 1e-4);
+  for (TopExp_Explorer ex(face, TopAbs_VERTEX); ex.More(); ex.Next())
+    builder.UpdateVertex(TopoDS::Vertex(ex.Current()), 1e-4);
+  auto model = LoadShape(face, "near_closed_arc");
+  ASSERT_TRUE(model);
+  MeshResult r = MeshOrDie(*model, MeshOptions());
+  ASSERT_EQ(r.faces.size(), 1u);
+  const FaceMesh& f = r.faces[0];
+  EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+  // 1e-3 of the diagonal (~28.3) on radius 10: about 37 segments around the circle.
+  EXPECT_GE(f.triangle_count(), 30);
+  EXPECT_NEAR(f.area, M_PI * radius * radius, 0.01 * M_PI * radius * radius);
+  EXPECT_EQ(OpenAndNonManifoldEdges(r.mesh).second, 0);
 }
 
 class CorpusTest : public ::testing::TestWithParam<const char*> {};
