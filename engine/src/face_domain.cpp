@@ -88,6 +88,17 @@ Status WalkWire(const Model& model, const TopoDS_Face& face, const TopoDS_Wire& 
     }
     walks->push_back(std::move(w));
   }
+  // The explorer follows the edges from vertex to vertex and silently drops those it cannot
+  // reach; a loop without them would leave a hole in the mesh.
+  int edges = 0;
+  for (TopExp_Explorer ex(wire, TopAbs_EDGE); ex.More(); ex.Next())
+    edges += ex.Current().Orientation() == TopAbs_FORWARD ||
+             ex.Current().Orientation() == TopAbs_REVERSED;
+  if (static_cast<int>(walks->size()) < edges)
+    return Status(StatusCode::kInternal,
+                  "a wire's edges do not connect end to end: the wire explorer reaches " +
+                      std::to_string(walks->size()) + " of its " + std::to_string(edges) +
+                      " edges");
   return Status::Ok();
 }
 
