@@ -15,6 +15,7 @@
 #include "budget.h"
 #include "face_mesher.h"
 #include "grids.h"
+#include "heal.h"
 #include "model.h"
 
 namespace rdmesh {
@@ -67,6 +68,12 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   std::vector<EdgeGrid> grids;
   Status st = BuildEdgeGrids(model, gc, options.threads, edge_needed, context, &grids);
   if (!st.ok()) return st;
+  // 1b. Grid healing: split grid segments until every face's boundary loops are valid in (u,v).
+  std::vector<int> todo;
+  for (int f = 1; f <= nf; ++f)
+    if (mesh_it[f - 1]) todo.push_back(f);
+  st = HealEdgeGrids(model, todo, options.nurbs, options.threads, context, &grids);
+  if (!st.ok()) return st;
   result.summary.edge_seconds = Since(t0);
 
   // 2. Faces, in parallel; each slot is written by one task.
@@ -78,9 +85,6 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   job.criteria.min_length = options.min_edge_length;
   job.max_triangles = kFaceTriangleCap;
   job.nurbs = options.nurbs;
-  std::vector<int> todo;
-  for (int f = 1; f <= nf; ++f)
-    if (mesh_it[f - 1]) todo.push_back(f);
   std::vector<std::vector<NodeRef>> refs(nf);
   std::atomic<int64_t> done{0};
   const int64_t total = std::count(wanted.begin(), wanted.end(), true);

@@ -3,6 +3,7 @@
 #include <BRepTools_WireExplorer.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom2d_Curve.hxx>
+#include <Geom_Surface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -10,6 +11,7 @@
 #include <TopoDS_Vertex.hxx>
 #include <TopoDS_Wire.hxx>
 #include <cmath>
+#include <cstdio>
 
 #include "model.h"
 
@@ -48,40 +50,132 @@ void ComputeScale(Surface& s, FaceDomain* d) {
   if (!std::isfinite(d->scale_v) || d->scale_v <= 0) d->scale_v = 1;
 }
 
+// One edge of a wire as the wire explorer walks it: its grid points' (u,v) in walking order.
+struct EdgeWalk {
+  int eid = 0;
+  bool reversed = false;
+  std::vector<Vec2> uv;
+};
+
+double VertexTolerance(const Model& model, int vertex_id) {
+  return vertex_id > 0 ? BRep_Tool::Tolerance(TopoDS::Vertex(model.vertices(vertex_id))) : 0.0;
+}
+
+std::string EdgeName(int eid) { return "edge " + std::to_string(eid); }
+
+// Walks one wire. Fails for an edge without grid or pcurve.
+Status WalkWire(const Model& model, const TopoDS_Face& face, const TopoDS_Wire& wire,
+                const std::vector<EdgeGrid>& grids, std::vector<EdgeWalk>* walks) {
+  walks->clear();
+  for (BRepTools_WireExplorer ex(wire, face); ex.More(); ex.Next()) {
+    TopoDS_Edge e = ex.Current();
+    if (e.Orientation() == TopAbs_INTERNAL || e.Orientation() == TopAbs_EXTERNAL) continue;
+    EdgeWalk w;
+    w.eid = model.edges.FindIndex(e);
+    if (w.eid == 0)
+      return Status(StatusCode::kInternal, "a face edge is missing from the edge map");
+    const EdgeGrid& g = grids[w.eid - 1];
+    if (g.t.size() < 2) return Status(StatusCode::kInternal, EdgeName(w.eid) + " has no grid");
+    double f, l;
+    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, f, l);
+    if (pcurve.IsNull())
+      return Status(StatusCode::kInternal, EdgeName(w.eid) + " has no pcurve on the face");
+    w.reversed = e.Orientation() == TopAbs_REVERSED;
+    const int n = static_cast<int>(g.t.size());
+    for (int k = 0; k < n; ++k) {
+      gp_Pnt2d p = pcurve->Value(g.t[w.reversed ? n - 1 - k : k]);
+      w.uv.push_back({p.X(), p.Y()});
+    }
+    walks->push_back(std::move(w));
+  }
+  // The explorer follows the edges from vertex to vertex and silently drops those it cannot
+  // reach; a loop without them would leave a hole in the mesh.
+  int edges = 0;
+  for (TopExp_Explorer ex(wire, TopAbs_EDGE); ex.More(); ex.Next())
+    edges += ex.Current().Orientation() == TopAbs_FORWARD ||
+             ex.Current().Orientation() == TopAbs_REVERSED;
+  if (static_cast<int>(walks->size()) < edges)
+    return Status(StatusCode::kInternal,
+                  "a wire's edges do not connect end to end: the wire explorer reaches " +
+                      std::to_string(walks->size()) + " of its " + std::to_string(edges) +
+                      " edges");
+  return Status::Ok();
+}
+
+// Where one pcurve ends and the next begins: moves the next walk by whole periods when that
+// makes the ends meet, and checks that what is left of the gap is within the tolerance of the
+// vertex they share (the B-rep promises no more). `wrap` is the junction that closes the loop.
+Status JoinWalks(const Model& model, const EdgeGrid& from_grid, const EdgeWalk& from, EdgeWalk* to,
+                 bool wrap, double period_u, double period_v, double uv_slack, Surface& surface) {
+  Vec2 end = from.uv.back(), start = to->uv.front();
+  if (!wrap) {
+    auto shift = [&](double period, double Vec2::*axis) {
+      if (period <= 0) return;
+      double k = std::round((end.*axis - start.*axis) / period);
+      if (k == 0 || std::fabs(end.*axis - (start.*axis + k * period)) > 1e-3 * period) return;
+      for (Vec2& p : to->uv) p.*axis += k * period;
+    };
+    shift(period_u, &Vec2::x);
+    shift(period_v, &Vec2::y);
+    start = to->uv.front();
+  }
+  Vec2 gap = start - end;
+  if (std::hypot(gap.x, gap.y) <= uv_slack) return Status::Ok();
+  const int vertex = from.reversed ? from_grid.first_vertex : from_grid.last_vertex;
+  double tol = VertexTolerance(model, vertex);
+  for (int eid : {from.eid, to->eid})
+    tol = std::max(tol, BRep_Tool::Tolerance(TopoDS::Edge(model.edge(eid))));
+  const double gap3 = Dist(surface.Point(end.x, end.y), surface.Point(start.x, start.y));
+  if (gap3 <= 2 * tol * (1 + 1e-6) + 1e-12) return Status::Ok();
+  char buf[200];
+  std::snprintf(buf, sizeof(buf),
+                " do not meet in (u,v): their pcurve ends at vertex %d are %.3g apart on the "
+                "surface, more than twice its tolerance %.3g",
+                vertex, gap3, tol);
+  return Status(StatusCode::kInternal,
+                std::string(wrap ? "a boundary loop does not close in (u,v): " : "") +
+                    EdgeName(from.eid) + " and " + EdgeName(to->eid) + buf);
+}
+
 }  // namespace
 
 Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
                        Surface& surface, FaceDomain* d) {
   *d = FaceDomain();
   TopoDS_Face face = TopoDS::Face(model.face(face_id).Oriented(TopAbs_FORWARD));
+  Handle(Geom_Surface) geom = BRep_Tool::Surface(face);
+  const double period_u = !geom.IsNull() && geom->IsUPeriodic() ? geom->UPeriod() : 0.0;
+  const double period_v = !geom.IsNull() && geom->IsVPeriodic() ? geom->VPeriod() : 0.0;
+  std::map<int, std::vector<int>> vertex_nodes;  // vertex id -> its nodes so far
+  std::vector<EdgeWalk> walks;
   for (TopExp_Explorer wexp(face, TopAbs_WIRE); wexp.More(); wexp.Next()) {
-    TopoDS_Wire wire = TopoDS::Wire(wexp.Current());
-    const int loop_start = static_cast<int>(d->uv.size());
-    Vec2 loop_end_uv;
-    for (BRepTools_WireExplorer ex(wire, face); ex.More(); ex.Next()) {
-      TopoDS_Edge e = ex.Current();
-      if (e.Orientation() == TopAbs_INTERNAL || e.Orientation() == TopAbs_EXTERNAL) continue;
-      int eid = model.edges.FindIndex(e);
-      if (eid == 0)
-        return Status(StatusCode::kInternal, "a face edge is missing from the edge map");
-      const EdgeGrid& g = grids[eid - 1];
-      if (g.t.size() < 2)
-        return Status(StatusCode::kInternal, "edge " + std::to_string(eid) + " has no grid");
-      double f, l;
-      Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, f, l);
-      if (pcurve.IsNull())
-        return Status(StatusCode::kInternal,
-                      "edge " + std::to_string(eid) + " has no pcurve on the face");
-      const bool reversed = e.Orientation() == TopAbs_REVERSED;
+    Status st = WalkWire(model, face, TopoDS::Wire(wexp.Current()), grids, &walks);
+    if (!st.ok()) return st;
+    if (walks.empty()) continue;
+    const int m = static_cast<int>(walks.size());
+    // The slack for pcurve ends that meet: 1e-3 of the loop's extent in (u,v), as before any
+    // tolerance is looked at.
+    double span = 0;
+    for (const EdgeWalk& w : walks)
+      for (const Vec2& p : w.uv)
+        span =
+            std::max({span, std::fabs(p.x - walks[0].uv[0].x), std::fabs(p.y - walks[0].uv[0].y)});
+    const double slack = 1e-3 * std::max(span, 1e-12) + 1e-9;
+    for (int i = 0; i < m; ++i) {
+      const int j = (i + 1) % m;
+      st = JoinWalks(model, grids[walks[i].eid - 1], walks[i], &walks[j], j == 0, period_u,
+                     period_v, slack, surface);
+      if (!st.ok()) return st;
+    }
+    // Nodes: every grid point but each walk's last, which is the next walk's first.
+    std::vector<int> loop;
+    std::vector<int> seg_edge, seg_index;
+    std::vector<bool> seg_degenerate;
+    for (const EdgeWalk& w : walks) {
+      const EdgeGrid& g = grids[w.eid - 1];
       const int n = static_cast<int>(g.t.size());
-      for (int k = 0; k < n; ++k) {
-        int idx = reversed ? n - 1 - k : k;
-        gp_Pnt2d p = pcurve->Value(g.t[idx]);
-        Vec2 uv{p.X(), p.Y()};
-        if (k == n - 1) {  // the next edge starts here
-          loop_end_uv = uv;
-          break;
-        }
+      for (int k = 0; k + 1 < n; ++k) {
+        const int idx = w.reversed ? n - 1 - k : k;
         NodeRef ref;
         Vec3 xyz;
         if (idx == 0 || idx == n - 1) {
@@ -90,36 +184,37 @@ Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGr
           xyz = VertexPoint(model, ref.entity);
         } else {
           ref.dim = 1;
-          ref.entity = eid;
+          ref.entity = w.eid;
           ref.t = g.t[idx];
           xyz = g.xyz[idx];
         }
-        int node = static_cast<int>(d->uv.size());
-        d->uv.push_back(uv);
-        d->xyz.push_back(xyz);
-        d->ref.push_back(ref);
-        d->segments.push_back({node, node + 1});
-        d->segment_splittable.push_back(g.degenerate);
+        int node = -1;
+        if (ref.dim == 0)  // loops that touch at a vertex share its node
+          for (int other : vertex_nodes[ref.entity])
+            if (d->uv[other].x == w.uv[k].x && d->uv[other].y == w.uv[k].y) node = other;
+        if (node < 0) {
+          node = static_cast<int>(d->uv.size());
+          d->uv.push_back(w.uv[k]);
+          d->xyz.push_back(xyz);
+          d->ref.push_back(ref);
+          if (ref.dim == 0) vertex_nodes[ref.entity].push_back(node);
+        }
+        loop.push_back(node);
+        seg_edge.push_back(w.eid);
+        seg_index.push_back(w.reversed ? n - 2 - k : k);
+        seg_degenerate.push_back(g.degenerate);
       }
     }
-    const int loop_end = static_cast<int>(d->uv.size());
-    if (loop_end - loop_start < 2) {
-      d->uv.resize(loop_start), d->xyz.resize(loop_start), d->ref.resize(loop_start);
-      d->segments.resize(loop_start), d->segment_splittable.resize(loop_start);
-      continue;
+    if (loop.size() < 2) continue;  // a lone pole: no boundary
+    d->loop_begin.push_back(static_cast<int>(d->segments.size()));
+    for (size_t k = 0; k < loop.size(); ++k) {
+      d->segments.push_back({loop[k], loop[(k + 1) % loop.size()]});
+      d->segment_splittable.push_back(seg_degenerate[k]);
+      d->segment_edge.push_back(seg_edge[k]);
+      d->segment_grid_index.push_back(seg_index[k]);
     }
-    d->segments.back()[1] = loop_start;  // close the loop
-    // The last pcurve must end where the first began.
-    Vec2 gap = loop_end_uv - d->uv[loop_start];
-    double span = 0;
-    for (int i = loop_start; i < loop_end; ++i) {
-      span = std::max(span, std::fabs(d->uv[i].x - d->uv[loop_start].x));
-      span = std::max(span, std::fabs(d->uv[i].y - d->uv[loop_start].y));
-    }
-    if (std::hypot(gap.x, gap.y) > 1e-3 * std::max(span, 1e-12) + 1e-9)
-      return Status(StatusCode::kInternal, "a boundary loop does not close in (u,v)");
   }
-  if (d->uv.size() < 3) return Status(StatusCode::kInternal, "the face has no boundary loop");
+  if (d->uv.size() < 2) return Status(StatusCode::kInternal, "the face has no boundary loop");
   d->umin = d->umax = d->uv[0].x;
   d->vmin = d->vmax = d->uv[0].y;
   for (const Vec2& p : d->uv) {
@@ -128,6 +223,85 @@ Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGr
   }
   ComputeScale(surface, d);
   return Status::Ok();
+}
+
+std::vector<DomainConflict> FindConflicts(const FaceDomain& d) {
+  std::vector<DomainConflict> out;
+  const int ns = static_cast<int>(d.segments.size());
+  std::vector<Vec2> p(d.uv.size());
+  for (size_t i = 0; i < p.size(); ++i) p[i] = {d.uv[i].x * d.scale_u, d.uv[i].y * d.scale_v};
+  const double extent = std::max((d.umax - d.umin) * d.scale_u, (d.vmax - d.vmin) * d.scale_v);
+  const double eps = 1e-12 * std::max(extent, 1e-300);
+  // Loops that enclose no area.
+  for (size_t k = 0; k < d.loop_begin.size(); ++k) {
+    const int b = d.loop_begin[k];
+    const int e = k + 1 < d.loop_begin.size() ? d.loop_begin[k + 1] : ns;
+    double area = 0, perimeter = 0;
+    for (int s = b; s < e; ++s) {
+      Vec2 a = p[d.segments[s][0]], c = p[d.segments[s][1]];
+      area += Cross(a, c);
+      perimeter += std::hypot(c.x - a.x, c.y - a.y);
+    }
+    if (e - b < 3 || std::fabs(area) <= 1e-10 * perimeter * perimeter)
+      for (int s = b; s < e; ++s) out.push_back({s, -1});
+  }
+  // Segment pairs, swept along u by their bounding boxes.
+  std::vector<int> order(ns);
+  for (int s = 0; s < ns; ++s) order[s] = s;
+  auto lo = [&](int s) { return std::min(p[d.segments[s][0]].x, p[d.segments[s][1]].x); };
+  auto hi = [&](int s) { return std::max(p[d.segments[s][0]].x, p[d.segments[s][1]].x); };
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return lo(a) < lo(b); });
+  auto seg_dist = [](Vec2 q, Vec2 a, Vec2 b) { return std::sqrt(SegmentDistance2(q, a, b)); };
+  std::vector<int> active;
+  for (int s : order) {
+    const double x0 = lo(s);
+    active.erase(
+        std::remove_if(active.begin(), active.end(), [&](int t) { return hi(t) < x0 - eps; }),
+        active.end());
+    const int a0 = d.segments[s][0], a1 = d.segments[s][1];
+    const Vec2 a = p[a0], b = p[a1];
+    for (int t : active) {
+      const int c0 = d.segments[t][0], c1 = d.segments[t][1];
+      const Vec2 c = p[c0], e = p[c1];
+      if (std::min(a.y, b.y) > std::max(c.y, e.y) + eps ||
+          std::min(c.y, e.y) > std::max(a.y, b.y) + eps)
+        continue;
+      bool conflict;
+      const int shared = (a0 == c0) + (a0 == c1) + (a1 == c0) + (a1 == c1);
+      if (shared >= 2) {
+        conflict = true;  // the same chord twice
+      } else if (shared == 1) {
+        // Neighbours conflict only when they fold back onto each other.
+        const int common = (a0 == c0 || a0 == c1) ? a0 : a1;
+        const Vec2 o = p[common];
+        const Vec2 u = p[common == a0 ? a1 : a0] - o, v = p[(c0 == common) ? c1 : c0] - o;
+        const double lu = std::hypot(u.x, u.y), lv = std::hypot(v.x, v.y);
+        conflict = std::fabs(Cross(u, v)) <= 1e-12 * lu * lv && u.x * v.x + u.y * v.y > 0;
+      } else {
+        const double o1 = Orient(a, b, c), o2 = Orient(a, b, e);
+        const double o3 = Orient(c, e, a), o4 = Orient(c, e, b);
+        conflict = ((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) &&
+                   ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0));
+        conflict = conflict || std::min({seg_dist(a, c, e), seg_dist(b, c, e), seg_dist(c, a, b),
+                                         seg_dist(e, a, b)}) <= eps;
+      }
+      if (conflict) out.push_back({std::min(s, t), std::max(s, t)});
+    }
+    active.push_back(s);
+  }
+  return out;
+}
+
+std::string DescribeConflict(const FaceDomain& d, const DomainConflict& c) {
+  auto edge_of = [&](int s) {
+    return d.segment_edge[s] > 0 ? EdgeName(d.segment_edge[s]) : std::string("a gap bridge");
+  };
+  const Vec2 q = d.uv[d.segments[c.a][0]];
+  char at[80];
+  std::snprintf(at, sizeof(at), " near (u,v) = (%.6g, %.6g)", q.x, q.y);
+  if (c.b < 0) return "a boundary loop through " + edge_of(c.a) + " encloses no area in (u,v)" + at;
+  return "boundary loops intersect in (u,v): segments of " + edge_of(c.a) + " and " + edge_of(c.b) +
+         " cross or touch" + at;
 }
 
 bool InsideDomain(const FaceDomain& d, Vec2 p) {

@@ -33,21 +33,44 @@ struct EdgeGrid {
 };
 
 /// Boundary of a face in (u,v). Nodes are the boundary nodes; segments join them with the face
-/// on their left for a FORWARD face (orientation is not relied on by the triangulation).
+/// on their left for a FORWARD face (orientation is not relied on by the triangulation). A
+/// vertex where two loops (or one loop twice) touch at the same (u,v) is one node.
 struct FaceDomain {
   std::vector<Vec2> uv;      ///< per node: surface parameters
   std::vector<Vec3> xyz;     ///< per node: world point (shared bit-identically with neighbours)
   std::vector<NodeRef> ref;  ///< per node: B-rep classification
-  std::vector<std::array<int, 2>> segments;       ///< node index pairs
-  std::vector<bool> segment_splittable;           ///< degenerate (pole) segments may be split
+  std::vector<std::array<int, 2>> segments;  ///< node index pairs
+  std::vector<bool> segment_splittable;      ///< degenerate (pole) segments may be split
+  /// Per segment: the edge id it comes from (0 for a bridge over a gap between pcurve ends) and
+  /// the index k of the edge grid segment [t[k], t[k+1]] it stands for.
+  std::vector<int> segment_edge, segment_grid_index;
+  /// Segments of loop k are [loop_begin[k], loop_begin[k + 1]), the last up to segments.size().
+  std::vector<int> loop_begin;
   double scale_u = 1, scale_v = 1;                ///< multiply u, v by these for isotropic 2D tests
   double umin = 0, umax = 0, vmin = 0, vmax = 0;  ///< bounds of the boundary nodes
 };
 
 /// Builds the domain of face `face_id` (its FORWARD orientation) from the edge grids (indexed
-/// by edge id - 1). Fails with a reason for bad pcurves or loops that do not close.
+/// by edge id - 1). Consecutive pcurves are joined across gaps that the vertex tolerance allows
+/// and across whole periods of a periodic surface. Fails with a reason that names the edges for
+/// bad pcurves and loops that do not close.
 Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
                        Surface& surface, FaceDomain* domain);
+
+/// A defect of a domain that the constrained triangulation cannot take: segments `a` and `b`
+/// cross, touch or overlap in (u,v), or (b = -1) segment `a` belongs to a loop that encloses no
+/// area (fewer than three nodes, or all on one line).
+struct DomainConflict {
+  int a = 0, b = -1;
+};
+
+/// All conflicts of the domain's boundary segments, in scaled (u,v). Most come from edge grids
+/// too coarse for the face (a chord that cuts across a nearby loop); splitting the edge grid
+/// segments involved removes them.
+std::vector<DomainConflict> FindConflicts(const FaceDomain& domain);
+
+/// A sentence that names the edges of the first conflict, for failure reasons.
+std::string DescribeConflict(const FaceDomain& domain, const DomainConflict& conflict);
 
 /// Interior seed points for curved faces: a coarse (u,v) grid, spaced by how far the surface
 /// normal turns, so that no starting triangle spans more than ~45 degrees of the surface.

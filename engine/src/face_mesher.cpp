@@ -76,6 +76,8 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     FaceDomain domain;
     Status st = BuildFaceDomain(model, face_id, grids, *surface, &domain);
     if (!st.ok()) return Failed(f, st.message());
+    std::vector<DomainConflict> conflicts = FindConflicts(domain);
+    if (!conflicts.empty()) return Failed(f, DescribeConflict(domain, conflicts.front()));
     std::vector<Vec2> seeds = SeedPoints(domain, *surface);
     // Constrained triangulation in scaled (u,v).
     std::vector<Vec2> points;

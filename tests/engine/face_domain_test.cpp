@@ -1,0 +1,197 @@
+// Boundary loops in (u,v) and the healing of edge grids (face_domain, heal), on small synthetic
+// faces that reproduce what real files do: edge grids too coarse for a face (a hole's chords cut
+// the outer loop, two one-segment edges close a loop of no area) and pcurve ends that meet only
+// within the vertex tolerance.
+
+#include "face_domain.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <BRepBuilderAPI_MakeEdge.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <GC_MakeArcOfCircle.hxx>
+#include <Geom2d_Line.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Vertex.hxx>
+#include <TopoDS_Wire.hxx>
+#include <cmath>
+#include <filesystem>
+#include <gp_Ax2.hxx>
+#include <gp_Circ.hxx>
+#include <gp_Pln.hxx>
+#include <string>
+
+#include "grids.h"
+#include "heal.h"
+#include "model.h"
+#include "rdmesh/engine.h"
+#include "surface.h"
+
+namespace rdmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::shared_ptr<const Model> LoadShape(const TopoDS_Shape& shape, const std::string& name) {
+  std::string path = (fs::temp_directory_path() /
+                      ("rdmesh_domain_" + std::to_string(::getpid()) + "_" + name + ".brep"))
+                         .string();
+  BRepTools::Write(shape, path.c_str());
+  auto model = LoadModel(path);
+  fs::remove(path);
+  EXPECT_TRUE(model.ok()) << model.status().ToString();
+  return model.ok() ? *model : nullptr;
+}
+
+std::vector<EdgeGrid> Grids(const Model& model, double max_deviation) {
+  GridCriteria criteria;
+  criteria.max_deviation = max_deviation;
+  std::vector<EdgeGrid> grids;
+  EXPECT_TRUE(BuildEdgeGrids(model, criteria, 1, {}, nullptr, &grids).ok());
+  return grids;
+}
+
+Status Domain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
+              FaceDomain* domain) {
+  std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), false);
+  return BuildFaceDomain(model, face_id, grids, *surface, domain);
+}
+
+double MeshArea(const FaceMesh& f) { return f.area; }
+
+// A disc of radius 1.5875 with a concentric hole of radius 1.0795 (a face of a real assembly).
+// At a deviation of 1 both circles get the 3 segments a closed edge needs at least, and the two
+// triangles cross.
+TopoDS_Shape DiscWithHole() {
+  gp_Ax2 axis(gp::Origin(), gp::DZ());
+  TopoDS_Wire outer =
+      BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(gp_Circ(axis, 1.5875)).Edge()).Wire();
+  TopoDS_Wire hole =
+      BRepBuilderAPI_MakeWire(
+          BRepBuilderAPI_MakeEdge(gp_Circ(gp_Ax2(gp::Origin(), gp::DZ(), -gp::DX()), 1.0795))
+              .Edge())
+          .Wire();
+  hole.Reverse();
+  BRepBuilderAPI_MakeFace make(gp_Pln(gp::XOY()), outer);
+  make.Add(hole);
+  return make.Face();
+}
+
+TEST(FaceDomainTest, CoarseHoleCrossesTheOuterLoopUntilHealed) {
+  auto model = LoadShape(DiscWithHole(), "disc_with_hole");
+  ASSERT_TRUE(model);
+  std::vector<EdgeGrid> grids = Grids(*model, 1.0);
+  FaceDomain domain;
+  ASSERT_TRUE(Domain(*model, 1, grids, &domain).ok());
+  std::vector<DomainConflict> conflicts = FindConflicts(domain);
+  ASSERT_FALSE(conflicts.empty());
+  EXPECT_NE(DescribeConflict(domain, conflicts.front())
+                .find("boundary loops intersect in (u,v): segments of edge"),
+            std::string::npos)
+      << DescribeConflict(domain, conflicts.front());
+
+  HealStats stats;
+  ASSERT_TRUE(HealEdgeGrids(*model, {1}, false, 1, nullptr, &grids, &stats).ok());
+  EXPECT_GT(stats.splits, 0);
+  ASSERT_TRUE(Domain(*model, 1, grids, &domain).ok());
+  EXPECT_TRUE(FindConflicts(domain).empty());
+}
+
+TEST(FaceDomainTest, CoarseHoleFaceIsMeshed) {
+  auto model = LoadShape(DiscWithHole(), "disc_with_hole_mesh");
+  ASSERT_TRUE(model);
+  MeshOptions options;
+  options.max_deviation = 1.0;
+  auto r = MeshModel(*model, options);
+  ASSERT_TRUE(r.ok()) << r.status().ToString();
+  const FaceMesh& f = r->faces[0];
+  EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+  // Inscribed polygons: less than the annulus, far more than nothing.
+  const double annulus = M_PI * (1.5875 * 1.5875 - 1.0795 * 1.0795);
+  EXPECT_LT(MeshArea(f), annulus * 1.001);
+  EXPECT_GT(MeshArea(f), 0.5 * annulus);
+}
+
+// A circular segment: a 60 degree arc of radius 7.33 and its chord. At a deviation of 1 each
+// edge is one segment, and the loop is the same chord twice.
+TEST(FaceDomainTest, LoopOfTwoOneSegmentEdgesIsHealed) {
+  const double r = 7.33235;
+  gp_Circ circle(gp_Ax2(gp::Origin(), gp::DZ()), r);
+  gp_Pnt a(r * std::cos(M_PI / 3), r * std::sin(M_PI / 3), 0);
+  gp_Pnt b(r * std::cos(2 * M_PI / 3), r * std::sin(2 * M_PI / 3), 0);
+  TopoDS_Edge arc = BRepBuilderAPI_MakeEdge(GC_MakeArcOfCircle(circle, a, b, true).Value());
+  TopoDS_Edge chord = BRepBuilderAPI_MakeEdge(b, a);
+  TopoDS_Wire wire = BRepBuilderAPI_MakeWire(arc, chord).Wire();
+  auto model = LoadShape(BRepBuilderAPI_MakeFace(gp_Pln(gp::XOY()), wire).Face(), "segment");
+  ASSERT_TRUE(model);
+  MeshOptions options;
+  options.max_deviation = 1.0;
+  auto result = MeshModel(*model, options);
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  const FaceMesh& f = result->faces[0];
+  EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+  const double exact = 0.5 * r * r * (M_PI / 3 - std::sin(M_PI / 3));
+  EXPECT_GT(MeshArea(f), 0.5 * exact);
+  EXPECT_LT(MeshArea(f), exact);
+}
+
+// A 10 x 5 rectangle whose bottom edge has a pcurve moved by 0.02 along u: its ends miss the
+// neighbours' by 0.02 in (u,v), as real files do within their vertex tolerance.
+TopoDS_Shape RectangleWithShiftedPcurve(double vertex_tolerance) {
+  TopoDS_Wire wire = BRepBuilderAPI_MakePolygon(gp_Pnt(0, 0, 0), gp_Pnt(10, 0, 0), gp_Pnt(10, 5, 0),
+                                                gp_Pnt(0, 5, 0), true)
+                         .Wire();
+  TopoDS_Face face = BRepBuilderAPI_MakeFace(gp_Pln(gp::XOY()), wire).Face();
+  BRep_Builder builder;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+    TopoDS_Edge e = TopoDS::Edge(ex.Current());
+    TopoDS_Vertex v0, v1;
+    TopExp::Vertices(e, v0, v1);
+    gp_Pnt p0 = BRep_Tool::Pnt(v0), p1 = BRep_Tool::Pnt(v1);
+    if (std::fabs(p0.Y()) > 1e-9 || std::fabs(p1.Y()) > 1e-9) continue;
+    double f, l;
+    BRep_Tool::Range(e, f, l);
+    gp_Pnt2d q0(p0.X() + 0.02, 0);
+    gp_Dir2d dir(p1.X() - p0.X(), 0);
+    // A line pcurve with the edge's own parameter range: Value(f) is p0 moved by 0.02.
+    Handle(Geom2d_Line) line = new Geom2d_Line(gp_Pnt2d(q0.X() - f * dir.X(), 0), dir);
+    builder.UpdateEdge(e, line, face, 1e-7);
+    builder.UpdateVertex(v0, vertex_tolerance);
+    builder.UpdateVertex(v1, vertex_tolerance);
+  }
+  return face;
+}
+
+TEST(FaceDomainTest, PcurveGapWithinVertexToleranceIsBridged) {
+  auto model = LoadShape(RectangleWithShiftedPcurve(0.03), "gap_tolerated");
+  ASSERT_TRUE(model);
+  MeshOptions options;
+  auto result = MeshModel(*model, options);
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  const FaceMesh& f = result->faces[0];
+  EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+  EXPECT_NEAR(MeshArea(f), 50.0, 0.5);
+}
+
+TEST(FaceDomainTest, PcurveGapBeyondVertexToleranceNamesTheEdges) {
+  auto model = LoadShape(RectangleWithShiftedPcurve(1e-7), "gap_too_wide");
+  ASSERT_TRUE(model);
+  std::vector<EdgeGrid> grids = Grids(*model, 0.01);
+  FaceDomain domain;
+  Status st = Domain(*model, 1, grids, &domain);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("do not meet in (u,v)"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("tolerance"), std::string::npos) << st.message();
+}
+
+}  // namespace
+}  // namespace rdmesh
