@@ -113,6 +113,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
     FaceMesh& slot = result.faces[f - 1];
     int rep = model.face_representative[f - 1];
     if (!wanted[f - 1]) {
+      if (mesh_it[f - 1]) continue;  // a representative meshed for its copies: see below
       slot = FaceMesh();
       slot.face_id = f;
       slot.status = FaceStatus::kSkipped;

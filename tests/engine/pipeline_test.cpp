@@ -8,6 +8,7 @@
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
@@ -17,6 +18,7 @@
 #include <GC_MakeCircle.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
 #include <cmath>
 #include <filesystem>
 #include <gp_Circ.hxx>
@@ -174,6 +176,28 @@ TEST(PipelineTest, ArcWhoseEndsNearlyMeetIsDiscretised) {
   EXPECT_GE(f.triangle_count(), 30);
   EXPECT_NEAR(f.area, M_PI * radius * radius, 0.01 * M_PI * radius * radius);
   EXPECT_EQ(OpenAndNonManifoldEdges(r.mesh).second, 0);
+}
+
+TEST(PipelineTest, AskingForAPlacedCopyAloneMeshesIt) {
+  // Two placements of one box: faces 7..12 are copies of faces 1..6.
+  TopoDS_Shape box = BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape();
+  gp_Trsf shift;
+  shift.SetTranslation(gp_Vec(5, 0, 0));
+  TopoDS_Compound both;
+  BRep_Builder builder;
+  builder.MakeCompound(both);
+  builder.Add(both, box);
+  builder.Add(both, box.Moved(TopLoc_Location(shift)));
+  auto model = LoadShape(both, "two_boxes");
+  ASSERT_TRUE(model);
+  ASSERT_EQ(GetModelInfo(*model).faces, 12);
+  MeshOptions options;
+  options.face_ids = {7};
+  MeshResult r = MeshOrDie(*model, options);
+  EXPECT_EQ(r.faces[6].status, FaceStatus::kOk) << r.faces[6].reason;
+  EXPECT_EQ(r.faces[6].triangle_count(), 2);
+  EXPECT_EQ(r.faces[0].status, FaceStatus::kSkipped);
+  EXPECT_EQ(r.summary.triangles, 2);
 }
 
 class CorpusTest : public ::testing::TestWithParam<const char*> {};
