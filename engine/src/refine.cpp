@@ -63,6 +63,31 @@ class Refiner {
     }
     return cand;
   }
+  // Evaluate(tris).max_violation for a smoothing probe, HUGE_VAL when AgreementOk fails. Once the
+  // running maximum reaches `limit` it returns that (the probe cannot win); measuring starts at
+  // triangle *first, which then becomes the worst one of a full measurement.
+  double RingViolation(const std::vector<Tri>& tris, double old_agree, double limit,
+                       size_t* first) {
+    Vec2 uv[3];
+    Vec3 p[3], n[3];
+    double min_agreement = 1;
+    for (const Tri& t : tris) {
+      Corners(t, uv, p, n);
+      min_agreement = std::min(min_agreement, TriangleAgreement(uv, p, n));
+    }
+    if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
+    double worst = 0;
+    size_t worst_k = *first;
+    for (size_t j = 0; j < tris.size(); ++j) {
+      size_t k = (*first + j) % tris.size();
+      m_.MeasureCorners(tris[k], uv, p);
+      double violation = MeasureTriangle(s_, uv, p, c_).violation;
+      if (violation > worst) worst = violation, worst_k = k;
+      if (worst >= limit) return worst;
+    }
+    *first = worst_k;
+    return worst;
+  }
   // A folded triangle (its normal against the surface's) must be refined whatever it deviates.
   static void PenaliseFold(TriangleMeasure* m, double agreement) {
     m->agreement = agreement;
@@ -573,15 +598,19 @@ bool Refiner::SmoothNode(int v) {
     r += std::hypot(d.x * su_, d.y * sv_);
   }
   r /= nv.size();
-  auto objective = [&](Vec2 q) {
+  size_t worst_first = 0;  // the ring triangle that was worst at the last full measurement
+  for (size_t k = 1; k < ring.size(); ++k)
+    if (measure_[ring[k]].violation > measure_[ring[worst_first]].violation) worst_first = k;
+  auto move_to = [&](Vec2 q) {
     m_.uv[v] = q;
     m_.xyz[v] = s_.Point(q.x, q.y);
     m_.normal[v] = s_.Normal(q.x, q.y);
+  };
+  auto objective = [&](Vec2 q, double bound) {
+    move_to(q);
     for (const Tri& nt : tris)
       if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
-    Candidate cand = Evaluate(tris);
-    if (!AgreementOk(cand.min_agreement, old_agree)) return -HUGE_VAL;
-    return -cand.max_violation;
+    return -RingViolation(tris, old_agree, -bound, &worst_first);
   };
   PatternSearchResult res = CrossPatternSearch(
       objective, [](Vec2) { return true; }, uv0, -old_score, {0.2 * r / su_, 0.2 * r / sv_}, 0.1,
@@ -590,7 +619,7 @@ bool Refiner::SmoothNode(int v) {
     m_.uv[v] = uv0, m_.xyz[v] = x0, m_.normal[v] = n0;
     return false;
   }
-  objective(res.x);  // leave v at the optimum
+  move_to(res.x);  // leave v at the optimum
   Candidate cand = Evaluate(tris);
   for (size_t k = 0; k < ring.size(); ++k) {
     measure_[ring[k]] = cand.measures[k];
