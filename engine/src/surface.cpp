@@ -8,8 +8,11 @@
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
+#include <cstdint>
+#include <cstring>
 #include <gp_Pnt.hxx>
 #include <gp_Vec.hxx>
+#include <vector>
 
 namespace rdmesh {
 
@@ -71,6 +74,50 @@ class SphereSurface final : public Surface {
   double r_;
 };
 
+// Direct-mapped: slot = hash of the bits of (u, v); a new value overwrites the slot. The table
+// starts small (most faces are) and grows while it keeps missing, up to kMaxBits.
+class CachedSurface final : public Surface {
+ public:
+  explicit CachedSurface(std::unique_ptr<Surface> inner) : inner_(std::move(inner)) {
+    umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
+    Resize(kMinBits);
+  }
+  Vec3 Point(double u, double v) override {
+    uint64_t ku, kv;
+    std::memcpy(&ku, &u, sizeof(u));
+    std::memcpy(&kv, &v, sizeof(v));
+    uint64_t h =
+        (ku * 0x9E3779B97F4A7C15ull) ^ ((kv + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full);
+    Entry& e = table_[h >> (64 - bits_)];
+    if (e.filled && e.u == ku && e.v == kv) return e.point;
+    Vec3 p = inner_->Point(u, v);
+    if (++misses_ > 4 * table_.size() && bits_ < kMaxBits) {
+      Resize(bits_ + 2);
+      return p;
+    }
+    e = {ku, kv, true, p};
+    return p;
+  }
+  Vec3 Normal(double u, double v) override { return inner_->Normal(u, v); }
+
+ private:
+  static constexpr int kMinBits = 8, kMaxBits = 12;
+  struct Entry {
+    uint64_t u = 0, v = 0;
+    bool filled = false;
+    Vec3 point;
+  };
+  void Resize(int bits) {
+    bits_ = bits;
+    table_.assign(size_t{1} << bits, Entry{});
+    misses_ = 0;
+  }
+  std::unique_ptr<Surface> inner_;
+  std::vector<Entry> table_;
+  int bits_ = 0;
+  size_t misses_ = 0;
+};
+
 class CircleCurve final : public Curve {
  public:
   CircleCurve(double r, double z0) : r_(r), z0_(z0) {}
@@ -123,6 +170,10 @@ std::unique_ptr<Surface> MakeSphereSurface(double radius) {
 }
 std::unique_ptr<Curve> MakeCircleCurve(double radius, double z0) {
   return std::make_unique<CircleCurve>(radius, z0);
+}
+
+std::unique_ptr<Surface> WithPointCache(std::unique_ptr<Surface> surface) {
+  return std::make_unique<CachedSurface>(std::move(surface));
 }
 
 std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs) {
