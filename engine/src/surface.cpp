@@ -8,6 +8,7 @@
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <gp_Pnt.hxx>
@@ -129,14 +130,25 @@ class CircleCurve final : public Curve {
 
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 
+// OCCT evaluator. A B-spline adaptor evaluates through a polynomial cache of one knot span and
+// rebuilds it whenever a point falls in another span, which refinement does all the time (a
+// triangle's samples straddle knot lines). So B-splines get a few adaptors, each kept on the span
+// it last served; the cache content depends only on the span, so the values are the same.
 class OcctSurface final : public Surface {
  public:
-  explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {}
-  Vec3 Point(double u, double v) override { return ToVec(adaptor_.Value(u, v)); }
+  explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {
+    if (adaptor_.GetType() != GeomAbs_BSplineSurface) return;
+    Handle(Geom_BSplineSurface) bspline = adaptor_.BSpline();
+    for (int i = 1; i <= bspline->NbUKnots(); ++i) uknots_.push_back(bspline->UKnot(i));
+    for (int i = 1; i <= bspline->NbVKnots(); ++i) vknots_.push_back(bspline->VKnot(i));
+    spans_.resize(kSpans);
+    for (Span& span : spans_) span.adaptor.Load(surface);
+  }
+  Vec3 Point(double u, double v) override { return ToVec(Adaptor(u, v).Value(u, v)); }
   Vec3 Normal(double u, double v) override {
     gp_Pnt p;
     gp_Vec su, sv;
-    adaptor_.D1(u, v, p, su, sv);
+    Adaptor(u, v).D1(u, v, p, su, sv);
     gp_Vec n = su.Crossed(sv);
     double scale = su.SquareMagnitude() + sv.SquareMagnitude();
     if (n.SquareMagnitude() > 1e-16 * scale * scale && scale > 0) {
@@ -147,7 +159,37 @@ class OcctSurface final : public Surface {
   }
 
  private:
+  static constexpr int kSpans = 8;
+  struct Span {
+    int iu = -1, iv = -1;
+    uint64_t last_use = 0;
+    GeomAdaptor_Surface adaptor;
+  };
+  // The adaptor to evaluate (u, v) with: for a B-spline the one on its knot span, else the
+  // least recently used one, which moves there.
+  const GeomAdaptor_Surface& Adaptor(double u, double v) {
+    if (spans_.empty()) return adaptor_;
+    int iu =
+        static_cast<int>(std::upper_bound(uknots_.begin(), uknots_.end(), u) - uknots_.begin());
+    int iv =
+        static_cast<int>(std::upper_bound(vknots_.begin(), vknots_.end(), v) - vknots_.begin());
+    ++clock_;
+    Span* oldest = &spans_[0];
+    for (Span& span : spans_) {
+      if (span.iu == iu && span.iv == iv) {
+        span.last_use = clock_;
+        return span.adaptor;
+      }
+      if (span.last_use < oldest->last_use) oldest = &span;
+    }
+    oldest->iu = iu, oldest->iv = iv, oldest->last_use = clock_;
+    return oldest->adaptor;
+  }
+
   GeomAdaptor_Surface adaptor_;
+  std::vector<double> uknots_, vknots_;  // distinct knots of a B-spline
+  std::vector<Span> spans_;              // empty unless B-spline
+  uint64_t clock_ = 0;
 };
 
 class OcctCurve final : public Curve {
