@@ -63,6 +63,35 @@ class Refiner {
     }
     return cand;
   }
+  // Evaluate(tris) for a candidate that is wanted only when the fold guard holds (AgreementOk
+  // against old_agree) and wanted(max_violation): false, with *cand partial, as soon as either
+  // fails. wanted must stay false once it is as the violation grows.
+  template <class Wanted>
+  bool EvaluateWanted(const std::vector<Tri>& tris, double old_agree, Wanted wanted,
+                      Candidate* cand) {
+    Vec2 uv[3];
+    Vec3 p[3], n[3];
+    double agreement[64];
+    if (tris.size() > 64) {
+      *cand = Evaluate(tris);
+      return AgreementOk(cand->min_agreement, old_agree) && wanted(cand->max_violation);
+    }
+    for (size_t k = 0; k < tris.size(); ++k) {
+      Corners(tris[k], uv, p, n);
+      agreement[k] = TriangleAgreement(uv, p, n);
+      cand->min_agreement = std::min(cand->min_agreement, agreement[k]);
+    }
+    if (!AgreementOk(cand->min_agreement, old_agree)) return false;
+    cand->measures.reserve(tris.size());
+    for (size_t k = 0; k < tris.size(); ++k) {
+      m_.MeasureCorners(tris[k], uv, p);
+      cand->measures.push_back(MeasureTriangle(s_, uv, p, c_));
+      PenaliseFold(&cand->measures.back(), agreement[k]);
+      cand->max_violation = std::max(cand->max_violation, cand->measures.back().violation);
+      if (!wanted(cand->max_violation)) return false;
+    }
+    return true;
+  }
   // Evaluate(tris).max_violation for a smoothing probe, HUGE_VAL when AgreementOk fails. Once the
   // running maximum reaches `limit` it returns that (the probe cannot win); measuring starts at
   // triangle *first, which then becomes the worst one of a full measurement.
@@ -478,9 +507,12 @@ bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
     for (const Tri& nt : tris)
       oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
     if (!oriented) continue;
-    Candidate cand = Evaluate(tris);
-    if (cand.max_violation > slack || !AgreementOk(cand.min_agreement, old_agree)) continue;
-    if (best->w < 0 || cand.max_violation < best->cand.max_violation) {
+    // Wanted only within the slack and better than the best so far.
+    auto wanted = [&](double violation) {
+      return violation <= slack && (best->w < 0 || violation < best->cand.max_violation);
+    };
+    Candidate cand;
+    if (EvaluateWanted(tris, old_agree, wanted, &cand)) {
       best->w = w, best->cand = std::move(cand), best->tris = std::move(tris);
       best->cavity = cavity;
     }
@@ -607,9 +639,10 @@ bool Refiner::SmoothNode(int v) {
     m_.normal[v] = s_.Normal(q.x, q.y);
   };
   auto objective = [&](Vec2 q, double bound) {
-    move_to(q);
+    m_.uv[v] = q;  // the (u,v) test first: S and its normal only for oriented probes
     for (const Tri& nt : tris)
       if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
+    move_to(q);
     return -RingViolation(tris, old_agree, -bound, &worst_first);
   };
   PatternSearchResult res = CrossPatternSearch(
