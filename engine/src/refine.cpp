@@ -50,6 +50,7 @@ class Refiner {
   }
   Candidate Evaluate(const std::vector<Tri>& tris) {
     Candidate cand;
+    cand.measures.reserve(tris.size());
     for (const Tri& t : tris) {
       Vec2 uv[3];
       Vec3 p[3], n[3];

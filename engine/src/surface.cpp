@@ -161,7 +161,7 @@ class OcctSurface final : public Surface {
  private:
   static constexpr int kSpans = 8;
   struct Span {
-    int iu = -1, iv = -1;
+    double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // its knot span: [u0, u1) x [v0, v1)
     uint64_t last_use = 0;
     GeomAdaptor_Surface adaptor;
   };
@@ -169,20 +169,24 @@ class OcctSurface final : public Surface {
   // least recently used one, which moves there.
   const GeomAdaptor_Surface& Adaptor(double u, double v) {
     if (spans_.empty()) return adaptor_;
-    int iu =
-        static_cast<int>(std::upper_bound(uknots_.begin(), uknots_.end(), u) - uknots_.begin());
-    int iv =
-        static_cast<int>(std::upper_bound(vknots_.begin(), vknots_.end(), v) - vknots_.begin());
     ++clock_;
     Span* oldest = &spans_[0];
     for (Span& span : spans_) {
-      if (span.iu == iu && span.iv == iv) {
+      if (span.u0 <= u && u < span.u1 && span.v0 <= v && v < span.v1) {
         span.last_use = clock_;
         return span.adaptor;
       }
       if (span.last_use < oldest->last_use) oldest = &span;
     }
-    oldest->iu = iu, oldest->iv = iv, oldest->last_use = clock_;
+    // The knot interval [k[i-1], k[i]) holding t, open-ended beyond the first and last knots.
+    auto interval = [](const std::vector<double>& k, double t, double* lo, double* hi) {
+      size_t i = std::upper_bound(k.begin(), k.end(), t) - k.begin();
+      *lo = i > 0 ? k[i - 1] : -HUGE_VAL;
+      *hi = i < k.size() ? k[i] : HUGE_VAL;
+    };
+    interval(uknots_, u, &oldest->u0, &oldest->u1);
+    interval(vknots_, v, &oldest->v0, &oldest->v1);
+    oldest->last_use = clock_;
     return oldest->adaptor;
   }
 
