@@ -93,23 +93,21 @@ class Refiner {
     }
     return true;
   }
-  // Evaluate(tris).max_violation for a smoothing probe, HUGE_VAL when AgreementOk fails. Once the
-  // running maximum reaches `limit` it returns that (the probe cannot win); measuring starts at
-  // triangle *first, which then becomes the worst one of a full measurement.
+  // Evaluate(tris).max_violation for a smoothing probe, HUGE_VAL when AgreementOk fails. Once
+  // the probe shows it cannot win (the fold guard fails, or the running maximum reaches `limit`)
+  // it returns a value >= limit. Measuring starts at triangle *first, which then becomes the
+  // worst one of a full measurement.
   double RingViolation(const std::vector<Tri>& tris, double old_agree, double limit,
                        size_t* first) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
-    double min_agreement = 1;
-    for (const Tri& t : tris) {
-      Corners(t, uv, p, n);
-      min_agreement = std::min(min_agreement, TriangleAgreement(uv, p, n));
-    }
-    if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
-    double worst = 0;
+    double min_agreement = 1, worst = 0;
     size_t worst_k = *first;
     for (size_t j = 0; j < tris.size(); ++j) {
       size_t k = (*first + j) % tris.size();
+      Corners(tris[k], uv, p, n);
+      min_agreement = std::min(min_agreement, TriangleAgreement(uv, p, n));
+      if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
       m_.MeasureCorners(tris[k], uv, p);
       double violation = MeasureTriangle(s_, uv, p, c_).violation;
       if (violation > worst) worst = violation, worst_k = k;
