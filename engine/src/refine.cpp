@@ -93,25 +93,28 @@ class Refiner {
     }
     return true;
   }
-  // Evaluate(tris).max_violation for a smoothing probe, HUGE_VAL when AgreementOk fails. Once
-  // the probe shows it cannot win (the fold guard fails, or the running maximum reaches `limit`)
-  // it returns a value >= limit. Measuring starts at triangle *first, which then becomes the
-  // worst one of a full measurement.
-  double RingViolation(const std::vector<Tri>& tris, double old_agree, double limit,
+  // Evaluate(tris).max_violation for a smoothing probe of node v, HUGE_VAL when AgreementOk
+  // fails. Once the probe shows it cannot win (the running maximum reaches `limit`, or the fold
+  // guard fails) it returns a value >= limit. v's surface normal is evaluated only when the fold
+  // guard is first needed. Measuring starts at triangle *first, which then becomes the worst one
+  // of a full measurement.
+  double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
                        size_t* first) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
     double min_agreement = 1, worst = 0;
     size_t worst_k = *first;
+    bool normal_ready = false;
     for (size_t j = 0; j < tris.size(); ++j) {
       size_t k = (*first + j) % tris.size();
-      Corners(tris[k], uv, p, n);
-      min_agreement = std::min(min_agreement, TriangleAgreement(uv, p, n));
-      if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
       m_.MeasureCorners(tris[k], uv, p);
       double violation = MeasureTriangle(s_, uv, p, c_).violation;
       if (violation > worst) worst = violation, worst_k = k;
       if (worst >= limit) return worst;
+      if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
+      Corners(tris[k], uv, p, n);
+      min_agreement = std::min(min_agreement, TriangleAgreement(uv, p, n));
+      if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
     }
     *first = worst_k;
     return worst;
@@ -641,8 +644,8 @@ bool Refiner::SmoothNode(int v) {
     m_.uv[v] = q;  // the (u,v) test first: S and its normal only for oriented probes
     for (const Tri& nt : tris)
       if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
-    move_to(q);
-    return -RingViolation(tris, old_agree, -bound, &worst_first);
+    m_.xyz[v] = s_.Point(q.x, q.y);  // RingViolation evaluates the normal when it needs it
+    return -RingViolation(tris, v, old_agree, -bound, &worst_first);
   };
   PatternSearchResult res = CrossPatternSearch(
       objective, [](Vec2) { return true; }, uv0, -old_score, {0.2 * r / su_, 0.2 * r / sv_}, 0.1,
