@@ -98,22 +98,27 @@ class Refiner {
   // guard fails) it returns a value >= limit. v's surface normal is evaluated only when the fold
   // guard is first needed. Measuring starts at triangle *first, which then becomes the worst one
   // of a full measurement.
+  // A full measurement leaves in `measures` what Evaluate(tris).measures would hold.
   double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
-                       size_t* first) {
+                       size_t* first, std::vector<TriangleMeasure>* measures) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
     double min_agreement = 1, worst = 0;
     size_t worst_k = *first;
     bool normal_ready = false;
+    measures->resize(tris.size());
     for (size_t j = 0; j < tris.size(); ++j) {
       size_t k = (*first + j) % tris.size();
       m_.MeasureCorners(tris[k], uv, p);
-      double violation = MeasureTriangle(s_, uv, p, c_).violation;
-      if (violation > worst) worst = violation, worst_k = k;
+      TriangleMeasure& m = (*measures)[k];
+      m = MeasureTriangle(s_, uv, p, c_);
+      if (m.violation > worst) worst = m.violation, worst_k = k;
       if (worst >= limit) return worst;
       if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
       Corners(tris[k], uv, p, n);
-      min_agreement = std::min(min_agreement, TriangleAgreement(uv, p, n));
+      double agreement = TriangleAgreement(uv, p, n);
+      PenaliseFold(&m, agreement);  // a no-op on violation once the guard below holds
+      min_agreement = std::min(min_agreement, agreement);
       if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
     }
     *first = worst_k;
@@ -635,17 +640,18 @@ bool Refiner::SmoothNode(int v) {
   size_t worst_first = 0;  // the ring triangle that was worst at the last full measurement
   for (size_t k = 1; k < ring.size(); ++k)
     if (measure_[ring[k]].violation > measure_[ring[worst_first]].violation) worst_first = k;
-  auto move_to = [&](Vec2 q) {
-    m_.uv[v] = q;
-    m_.xyz[v] = s_.Point(q.x, q.y);
-    m_.normal[v] = s_.Normal(q.x, q.y);
-  };
+  // The search ends at the last probe measured in full (every other value is an upper bound
+  // that lost), so that probe's point, normal and measures are the result's.
+  std::vector<TriangleMeasure> measures, best_measures;
+  Vec3 best_xyz, best_normal;
   auto objective = [&](Vec2 q, double bound) {
     m_.uv[v] = q;  // the (u,v) test first: S and its normal only for oriented probes
     for (const Tri& nt : tris)
       if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
     m_.xyz[v] = s_.Point(q.x, q.y);  // RingViolation evaluates the normal when it needs it
-    return -RingViolation(tris, v, old_agree, -bound, &worst_first);
+    double worst = RingViolation(tris, v, old_agree, -bound, &worst_first, &measures);
+    if (worst < -bound) best_xyz = m_.xyz[v], best_normal = m_.normal[v], best_measures = measures;
+    return -worst;
   };
   PatternSearchResult res = CrossPatternSearch(
       objective, [](Vec2) { return true; }, uv0, -old_score, {0.2 * r / su_, 0.2 * r / sv_}, 0.1,
@@ -654,10 +660,9 @@ bool Refiner::SmoothNode(int v) {
     m_.uv[v] = uv0, m_.xyz[v] = x0, m_.normal[v] = n0;
     return false;
   }
-  move_to(res.x);  // leave v at the optimum
-  Candidate cand = Evaluate(tris);
+  m_.uv[v] = res.x, m_.xyz[v] = best_xyz, m_.normal[v] = best_normal;  // v at the optimum
   for (size_t k = 0; k < ring.size(); ++k) {
-    measure_[ring[k]] = cand.measures[k];
+    measure_[ring[k]] = best_measures[k];
     ++stamp_[ring[k]];
   }
   ++stats_.moves;
