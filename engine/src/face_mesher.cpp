@@ -72,7 +72,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
   try {
     const TopoDS_Face& face = model.face(face_id);
     f.surface_type = FaceSurfaceType(face);
-    std::unique_ptr<Surface> surface = MakeFaceSurface(face, job.nurbs);
+    std::unique_ptr<Surface> surface = WithPointCache(MakeFaceSurface(face, job.nurbs));
     FaceDomain domain;
     Status st = BuildFaceDomain(model, face_id, grids, *surface, &domain);
     if (!st.ok()) return Failed(f, st.message());

@@ -46,6 +46,7 @@ int WorkMesh::CornerOf(int t, int v) const {
 
 std::vector<int> WorkMesh::Ring(int v) const {
   std::vector<int> ring;
+  ring.reserve(8);
   int start = node_tri[v];
   if (start < 0 || !alive[start]) return ring;
   // Walk one way (across the edge after v), then, if the fan is open, the other way.
@@ -68,6 +69,7 @@ std::vector<int> WorkMesh::Ring(int v) const {
 
 std::vector<int> WorkMesh::Neighbours(int v) const {
   std::vector<int> out;
+  out.reserve(8);
   for (int t : Ring(v)) {
     int k = CornerOf(t, v);
     for (int j : {tri[t][(k + 1) % 3], tri[t][(k + 2) % 3]})

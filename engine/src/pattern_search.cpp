@@ -1,6 +1,8 @@
 #include "pattern_search.h"
 
 #include <cmath>
+#include <cstring>
+#include <vector>
 
 namespace rdmesh {
 
@@ -40,6 +42,30 @@ PatternSearchResult CrossPatternSearch(const std::function<double(Vec2)>& f,
                                        const std::function<bool(Vec2)>& feasible, Vec2 x0,
                                        double f0, Vec2 step, double min_step_fraction,
                                        int max_evals) {
+  return CrossPatternSearch([&f](Vec2 x, double) { return f(x); }, feasible, x0, f0, step,
+                            min_step_fraction, max_evals);
+}
+
+PatternSearchResult CrossPatternSearch(const BoundedObjective& f,
+                                       const std::function<bool(Vec2)>& feasible, Vec2 x0,
+                                       double f0, Vec2 step, double min_step_fraction,
+                                       int max_evals) {
+  // Every probe's value (or upper bound), to answer repeated probes: after a move the probe back
+  // and the extrapolated point are often ones the search has seen. A stored bound stays valid
+  // because the bounds passed to f never decrease (they are the best value so far).
+  struct Probe {
+    Vec2 x;
+    double value;
+  };
+  std::vector<Probe> seen;
+  seen.reserve(max_evals + 4);
+  auto eval = [&](Vec2 x, double bound) {
+    for (const Probe& p : seen)
+      if (std::memcmp(&p.x, &x, sizeof(Vec2)) == 0) return p.value;
+    double v = f(x, bound);
+    seen.push_back({x, v});
+    return v;
+  };
   PatternSearchResult r{x0, f0, 0};
   Vec2 h = step;
   const Vec2 min_h = min_step_fraction * step;
@@ -50,7 +76,7 @@ PatternSearchResult CrossPatternSearch(const std::function<double(Vec2)>& f,
     for (const Vec2& d : probes) {
       Vec2 x = r.x + d;
       if (!feasible(x)) continue;
-      double v = f(x);
+      double v = eval(x, best);
       ++r.evals;
       if (v > best) best = v, best_x = x;
     }
@@ -61,7 +87,7 @@ PatternSearchResult CrossPatternSearch(const std::function<double(Vec2)>& f,
       r.value = best;
       Vec2 x = r.x + dir;
       if (r.evals < max_evals && feasible(x)) {
-        double v = f(x);
+        double v = eval(x, r.value);
         ++r.evals;
         if (v > r.value) r.x = x, r.value = v;
       }

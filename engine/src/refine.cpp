@@ -57,6 +57,7 @@ class Refiner {
   }
   Candidate Evaluate(const std::vector<Tri>& tris) {
     Candidate cand;
+    cand.measures.reserve(tris.size());
     for (const Tri& t : tris) {
       Vec2 uv[3];
       Vec3 p[3], n[3];
@@ -69,6 +70,66 @@ class Refiner {
       cand.max_violation = std::max(cand.max_violation, cand.measures.back().violation);
     }
     return cand;
+  }
+  // Evaluate(tris) for a candidate that is wanted only when the fold guard holds (AgreementOk
+  // against old_agree) and wanted(max_violation): false, with *cand partial, as soon as either
+  // fails. wanted must stay false once it is as the violation grows.
+  template <class Wanted>
+  bool EvaluateWanted(const std::vector<Tri>& tris, double old_agree, Wanted wanted,
+                      Candidate* cand) {
+    Vec2 uv[3];
+    Vec3 p[3], n[3];
+    double agreement[64];
+    if (tris.size() > 64) {
+      *cand = Evaluate(tris);
+      return AgreementOk(cand->min_agreement, old_agree) && wanted(cand->max_violation);
+    }
+    for (size_t k = 0; k < tris.size(); ++k) {
+      Corners(tris[k], uv, p, n);
+      agreement[k] = TriangleAgreement(uv, p, n);
+      cand->min_agreement = std::min(cand->min_agreement, agreement[k]);
+    }
+    if (!AgreementOk(cand->min_agreement, old_agree)) return false;
+    cand->measures.reserve(tris.size());
+    for (size_t k = 0; k < tris.size(); ++k) {
+      m_.MeasureCorners(tris[k], uv, p);
+      cand->measures.push_back(MeasureTriangle(s_, uv, p, c_));
+      PenaliseFold(&cand->measures.back(), agreement[k]);
+      cand->max_violation = std::max(cand->max_violation, cand->measures.back().violation);
+      if (!wanted(cand->max_violation)) return false;
+    }
+    return true;
+  }
+  // Evaluate(tris).max_violation for a smoothing probe of node v, HUGE_VAL when AgreementOk
+  // fails. Once the probe shows it cannot win (the running maximum reaches `limit`, or the fold
+  // guard fails) it returns a value >= limit. v's surface normal is evaluated only when the fold
+  // guard is first needed. Measuring starts at triangle *first, which then becomes the worst one
+  // of a full measurement.
+  // A full measurement leaves in `measures` what Evaluate(tris).measures would hold.
+  double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
+                       size_t* first, std::vector<TriangleMeasure>* measures) {
+    Vec2 uv[3];
+    Vec3 p[3], n[3];
+    double min_agreement = 1, worst = 0;
+    size_t worst_k = *first;
+    bool normal_ready = false;
+    measures->resize(tris.size());
+    for (size_t j = 0; j < tris.size(); ++j) {
+      size_t k = (*first + j) % tris.size();
+      m_.MeasureCorners(tris[k], uv, p);
+      TriangleMeasure& m = (*measures)[k];
+      m = MeasureTriangle(s_, uv, p, c_);
+      if (m.violation > worst) worst = m.violation, worst_k = k;
+      if (worst >= limit) return worst;
+      if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
+      Corners(tris[k], uv, p, n);
+      double agreement = TriangleAgreement(uv, p, n);
+      PenaliseFold(&m, agreement);  // a no-op on violation once the guard below holds
+      min_agreement = std::min(min_agreement, agreement);
+      if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
+    }
+    *first = worst_k;
+    return worst;
   }
   // A folded triangle (its normal against the surface's) must be refined whatever it deviates.
   static void PenaliseFold(TriangleMeasure* m, double agreement) {
@@ -460,9 +521,12 @@ bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
     for (const Tri& nt : tris)
       oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
     if (!oriented) continue;
-    Candidate cand = Evaluate(tris);
-    if (cand.max_violation > slack || !AgreementOk(cand.min_agreement, old_agree)) continue;
-    if (best->w < 0 || cand.max_violation < best->cand.max_violation) {
+    // Wanted only within the slack and better than the best so far.
+    auto wanted = [&](double violation) {
+      return violation <= slack && (best->w < 0 || violation < best->cand.max_violation);
+    };
+    Candidate cand;
+    if (EvaluateWanted(tris, old_agree, wanted, &cand)) {
       best->w = w, best->cand = std::move(cand), best->tris = std::move(tris);
       best->cavity = cavity;
     }
@@ -580,15 +644,21 @@ bool Refiner::SmoothNode(int v) {
     r += std::hypot(d.x * su_, d.y * sv_);
   }
   r /= nv.size();
-  auto objective = [&](Vec2 q) {
-    m_.uv[v] = q;
-    m_.xyz[v] = s_.Point(q.x, q.y);
-    m_.normal[v] = s_.Normal(q.x, q.y);
+  size_t worst_first = 0;  // the ring triangle that was worst at the last full measurement
+  for (size_t k = 1; k < ring.size(); ++k)
+    if (measure_[ring[k]].violation > measure_[ring[worst_first]].violation) worst_first = k;
+  // The search ends at the last probe measured in full (every other value is an upper bound
+  // that lost), so that probe's point, normal and measures are the result's.
+  std::vector<TriangleMeasure> measures, best_measures;
+  Vec3 best_xyz, best_normal;
+  auto objective = [&](Vec2 q, double bound) {
+    m_.uv[v] = q;  // the (u,v) test first: S and its normal only for oriented probes
     for (const Tri& nt : tris)
       if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
-    Candidate cand = Evaluate(tris);
-    if (!AgreementOk(cand.min_agreement, old_agree)) return -HUGE_VAL;
-    return -cand.max_violation;
+    m_.xyz[v] = s_.Point(q.x, q.y);  // RingViolation evaluates the normal when it needs it
+    double worst = RingViolation(tris, v, old_agree, -bound, &worst_first, &measures);
+    if (worst < -bound) best_xyz = m_.xyz[v], best_normal = m_.normal[v], best_measures = measures;
+    return -worst;
   };
   PatternSearchResult res = CrossPatternSearch(
       objective, [](Vec2) { return true; }, uv0, -old_score, {0.2 * r / su_, 0.2 * r / sv_}, 0.1,
@@ -597,10 +667,9 @@ bool Refiner::SmoothNode(int v) {
     m_.uv[v] = uv0, m_.xyz[v] = x0, m_.normal[v] = n0;
     return false;
   }
-  objective(res.x);  // leave v at the optimum
-  Candidate cand = Evaluate(tris);
+  m_.uv[v] = res.x, m_.xyz[v] = best_xyz, m_.normal[v] = best_normal;  // v at the optimum
   for (size_t k = 0; k < ring.size(); ++k) {
-    measure_[ring[k]] = cand.measures[k];
+    measure_[ring[k]] = best_measures[k];
     ++stamp_[ring[k]];
   }
   ++stats_.moves;

@@ -8,8 +8,12 @@
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <gp_Pnt.hxx>
 #include <gp_Vec.hxx>
+#include <vector>
 
 namespace rdmesh {
 
@@ -71,6 +75,50 @@ class SphereSurface final : public Surface {
   double r_;
 };
 
+// Direct-mapped: slot = hash of the bits of (u, v); a new value overwrites the slot. The table
+// starts small (most faces are) and grows while it keeps missing, up to kMaxBits.
+class CachedSurface final : public Surface {
+ public:
+  explicit CachedSurface(std::unique_ptr<Surface> inner) : inner_(std::move(inner)) {
+    umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
+    Resize(kMinBits);
+  }
+  Vec3 Point(double u, double v) override {
+    uint64_t ku, kv;
+    std::memcpy(&ku, &u, sizeof(u));
+    std::memcpy(&kv, &v, sizeof(v));
+    uint64_t h =
+        (ku * 0x9E3779B97F4A7C15ull) ^ ((kv + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full);
+    Entry& e = table_[h >> (64 - bits_)];
+    if (e.filled && e.u == ku && e.v == kv) return e.point;
+    Vec3 p = inner_->Point(u, v);
+    if (++misses_ > 4 * table_.size() && bits_ < kMaxBits) {
+      Resize(bits_ + 2);
+      return p;
+    }
+    e = {ku, kv, true, p};
+    return p;
+  }
+  Vec3 Normal(double u, double v) override { return inner_->Normal(u, v); }
+
+ private:
+  static constexpr int kMinBits = 8, kMaxBits = 12;
+  struct Entry {
+    uint64_t u = 0, v = 0;
+    bool filled = false;
+    Vec3 point;
+  };
+  void Resize(int bits) {
+    bits_ = bits;
+    table_.assign(size_t{1} << bits, Entry{});
+    misses_ = 0;
+  }
+  std::unique_ptr<Surface> inner_;
+  std::vector<Entry> table_;
+  int bits_ = 0;
+  size_t misses_ = 0;
+};
+
 class CircleCurve final : public Curve {
  public:
   CircleCurve(double r, double z0) : r_(r), z0_(z0) {}
@@ -82,14 +130,25 @@ class CircleCurve final : public Curve {
 
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 
+// OCCT evaluator. A B-spline adaptor evaluates through a polynomial cache of one knot span and
+// rebuilds it whenever a point falls in another span, which refinement does all the time (a
+// triangle's samples straddle knot lines). So B-splines get a few adaptors, each kept on the span
+// it last served; the cache content depends only on the span, so the values are the same.
 class OcctSurface final : public Surface {
  public:
-  explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {}
-  Vec3 Point(double u, double v) override { return ToVec(adaptor_.Value(u, v)); }
+  explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {
+    if (adaptor_.GetType() != GeomAbs_BSplineSurface) return;
+    Handle(Geom_BSplineSurface) bspline = adaptor_.BSpline();
+    for (int i = 1; i <= bspline->NbUKnots(); ++i) uknots_.push_back(bspline->UKnot(i));
+    for (int i = 1; i <= bspline->NbVKnots(); ++i) vknots_.push_back(bspline->VKnot(i));
+    spans_.resize(kSpans);
+    for (Span& span : spans_) span.adaptor.Load(surface);
+  }
+  Vec3 Point(double u, double v) override { return ToVec(Adaptor(u, v).Value(u, v)); }
   Vec3 Normal(double u, double v) override {
     gp_Pnt p;
     gp_Vec su, sv;
-    adaptor_.D1(u, v, p, su, sv);
+    Adaptor(u, v).D1(u, v, p, su, sv);
     gp_Vec n = su.Crossed(sv);
     double scale = su.SquareMagnitude() + sv.SquareMagnitude();
     if (n.SquareMagnitude() > 1e-16 * scale * scale && scale > 0) {
@@ -100,7 +159,41 @@ class OcctSurface final : public Surface {
   }
 
  private:
+  static constexpr int kSpans = 8;
+  struct Span {
+    double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // its knot span: [u0, u1) x [v0, v1)
+    uint64_t last_use = 0;
+    GeomAdaptor_Surface adaptor;
+  };
+  // The adaptor to evaluate (u, v) with: for a B-spline the one on its knot span, else the
+  // least recently used one, which moves there.
+  const GeomAdaptor_Surface& Adaptor(double u, double v) {
+    if (spans_.empty()) return adaptor_;
+    ++clock_;
+    Span* oldest = &spans_[0];
+    for (Span& span : spans_) {
+      if (span.u0 <= u && u < span.u1 && span.v0 <= v && v < span.v1) {
+        span.last_use = clock_;
+        return span.adaptor;
+      }
+      if (span.last_use < oldest->last_use) oldest = &span;
+    }
+    // The knot interval [k[i-1], k[i]) holding t, open-ended beyond the first and last knots.
+    auto interval = [](const std::vector<double>& k, double t, double* lo, double* hi) {
+      size_t i = std::upper_bound(k.begin(), k.end(), t) - k.begin();
+      *lo = i > 0 ? k[i - 1] : -HUGE_VAL;
+      *hi = i < k.size() ? k[i] : HUGE_VAL;
+    };
+    interval(uknots_, u, &oldest->u0, &oldest->u1);
+    interval(vknots_, v, &oldest->v0, &oldest->v1);
+    oldest->last_use = clock_;
+    return oldest->adaptor;
+  }
+
   GeomAdaptor_Surface adaptor_;
+  std::vector<double> uknots_, vknots_;  // distinct knots of a B-spline
+  std::vector<Span> spans_;              // empty unless B-spline
+  uint64_t clock_ = 0;
 };
 
 class OcctCurve final : public Curve {
@@ -123,6 +216,10 @@ std::unique_ptr<Surface> MakeSphereSurface(double radius) {
 }
 std::unique_ptr<Curve> MakeCircleCurve(double radius, double z0) {
   return std::make_unique<CircleCurve>(radius, z0);
+}
+
+std::unique_ptr<Surface> WithPointCache(std::unique_ptr<Surface> surface) {
+  return std::make_unique<CachedSurface>(std::move(surface));
 }
 
 std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs) {

@@ -41,6 +41,12 @@ std::unique_ptr<Surface> MakeSphereSurface(double radius);
 /// Circle of radius r in the plane z = z0: C(t) = (r cos t, r sin t, z0).
 std::unique_ptr<Curve> MakeCircleCurve(double radius, double z0);
 
+/// Wraps `surface` so that Point() remembers recent results: refinement evaluates the same
+/// (u,v) many times (an edge's midpoint serves both its triangles and every re-measurement while
+/// its end nodes stay put). Exact: a hit returns the very value the surface returned for the
+/// same bits of u and v. A bounded, direct-mapped table; Normal() is passed through.
+std::unique_ptr<Surface> WithPointCache(std::unique_ptr<Surface> surface);
+
 /// OCCT evaluators for a located face / edge (the location is applied: world coordinates).
 /// `nurbs` converts the surface to a B-spline first.
 std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs);

@@ -1,0 +1,73 @@
+// Surface evaluators: the speed-ups (point cache, per-span B-spline adaptors) return exactly the
+// values a plain evaluation returns, whatever order the points come in.
+#include "surface.h"
+
+#include <gtest/gtest.h>
+
+#include <BRepPrimAPI_MakeTorus.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <algorithm>
+#include <random>
+#include <vector>
+
+namespace rdmesh {
+namespace {
+
+bool SameBits(Vec3 a, Vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+std::vector<Vec2> Samples(const Surface& s, int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(s.umin, s.umax), v(s.vmin, s.vmax);
+  std::vector<Vec2> out;
+  for (int i = 0; i < n; ++i) out.push_back({u(rng), v(rng)});
+  // Repeats and edge midpoints, as refinement asks for them.
+  for (int i = 0; i + 1 < n; i += 2) out.push_back(0.5 * (out[i] + out[i + 1]));
+  for (int i = 0; i < n; i += 3) out.push_back(out[i]);
+  return out;
+}
+
+TEST(SurfaceTest, PointCacheReturnsTheSurfaceValues) {
+  std::unique_ptr<Surface> plain = MakeSphereSurface(2.0);
+  std::unique_ptr<Surface> cached = WithPointCache(MakeSphereSurface(2.0));
+  plain->umin = cached->umin = 0, plain->umax = cached->umax = 6.28;
+  plain->vmin = cached->vmin = -1.5, plain->vmax = cached->vmax = 1.5;
+  // Enough points to make the table grow and overwrite slots.
+  for (const Vec2& q : Samples(*plain, 20000, 1)) {
+    ASSERT_TRUE(SameBits(plain->Point(q.x, q.y), cached->Point(q.x, q.y)));
+    ASSERT_TRUE(SameBits(plain->Normal(q.x, q.y), cached->Normal(q.x, q.y)));
+  }
+}
+
+TEST(SurfaceTest, BSplineValuesDoNotDependOnTheEvaluationOrder) {
+  TopoDS_Shape torus = BRepPrimAPI_MakeTorus(3.0, 1.0).Shape();
+  TopoDS_Face face = TopoDS::Face(TopExp_Explorer(torus, TopAbs_FACE).Current());
+  std::unique_ptr<Surface> a = MakeFaceSurface(face, true);
+  std::unique_ptr<Surface> b = MakeFaceSurface(face, true);
+  std::vector<Vec2> points = Samples(*a, 3000, 2);
+  std::vector<Vec3> pa, na;
+  for (const Vec2& q : points) pa.push_back(a->Point(q.x, q.y)), na.push_back(a->Normal(q.x, q.y));
+  // The same points in another order (so other knot spans are cached at each point), one
+  // evaluator per point for a few of them.
+  std::vector<int> order(points.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::shuffle(order.begin(), order.end(), std::mt19937(3));
+  for (int i : order) {
+    const Vec2& q = points[i];
+    ASSERT_TRUE(SameBits(pa[i], b->Point(q.x, q.y)));
+    ASSERT_TRUE(SameBits(na[i], b->Normal(q.x, q.y)));
+  }
+  for (int i = 0; i < 20; ++i) {
+    std::unique_ptr<Surface> fresh = MakeFaceSurface(face, true);
+    const Vec2& q = points[order[i]];
+    EXPECT_TRUE(SameBits(pa[order[i]], fresh->Point(q.x, q.y)));
+  }
+  // And they are points of the torus.
+  for (const Vec3& p : pa) {
+    double ring = std::hypot(p.x, p.y) - 3.0;
+    EXPECT_NEAR(std::hypot(ring, p.z), 1.0, 1e-6);
+  }
+}
+
+}  // namespace
+}  // namespace rdmesh
