@@ -122,6 +122,19 @@ TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
   return m;
 }
 
+double CentroidViolation(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& c) {
+  if (!(c.max_deviation > 0) || c.min_length > 0) return 0;
+  Vec3 n = Cross(p[1] - p[0], p[2] - p[0]);
+  double area2 = Norm(n);
+  double len2 = std::max({Dot(p[1] - p[0], p[1] - p[0]), Dot(p[2] - p[1], p[2] - p[1]),
+                          Dot(p[0] - p[2], p[0] - p[2])});
+  if (!(area2 > 1e-10 * len2)) return 0;
+  Vec2 cen_uv = (1.0 / 3.0) * (uv[0] + uv[1] + uv[2]);
+  Vec3 cen = s.Point(cen_uv.x, cen_uv.y);
+  Vec3 nh = (1.0 / area2) * n;
+  return std::fabs(Dot(nh, cen - p[0])) / c.max_deviation;
+}
+
 double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3]) {
   double o = Orient(uv[0], uv[1], uv[2]);
   Vec2 e0 = uv[1] - uv[0], e1 = uv[2] - uv[1], e2 = uv[0] - uv[2];

@@ -31,6 +31,14 @@ struct TriangleMeasure {
 TriangleMeasure MeasureTriangle(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
                                 const FaceCriteria& criteria);
 
+/// A lower bound of MeasureTriangle(...).violation from the centroid sample alone (the centroid
+/// height; the fitted peak can only raise the deviation), with the same arithmetic and the same
+/// centroid parameters as MeasureTriangle, so behind a point cache a full measure that follows
+/// reuses the sample. Lets a caller that only wants triangles below a limit skip the
+/// edge-midpoint samples of one that is already over it.
+double CentroidViolation(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
+                         const FaceCriteria& criteria);
+
 /// How well the triangle's 3D normal agrees with the surface normals at its corners (`normals`,
 /// oriented as Su x Sv): the smallest cosine between them. kInvalid when the (u,v) orientation
 /// is not positive or the triangle is degenerate in 3D other than at a pole (two corners at one

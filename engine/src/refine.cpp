@@ -108,6 +108,8 @@ class Refiner {
     measures->resize(tris.size());
     for (int k : *order) {
       m_.MeasureCorners(tris[k], uv, p);
+      double bound = CentroidViolation(s_, uv, p, c_);
+      if (bound >= limit) return bound;
       TriangleMeasure& m = (*measures)[k];
       m = MeasureTriangle(s_, uv, p, c_);
       worst = std::max(worst, m.violation);
