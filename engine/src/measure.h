@@ -31,13 +31,13 @@ struct TriangleMeasure {
 TriangleMeasure MeasureTriangle(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
                                 const FaceCriteria& criteria);
 
-/// A lower bound of MeasureTriangle(...).violation from the centroid sample alone (the centroid
-/// height; the fitted peak can only raise the deviation), with the same arithmetic and the same
-/// centroid parameters as MeasureTriangle, so behind a point cache a full measure that follows
-/// reuses the sample. Lets a caller that only wants triangles below a limit skip the
-/// edge-midpoint samples of one that is already over it.
-double CentroidViolation(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
-                         const FaceCriteria& criteria);
+/// MeasureTriangle for a caller that only wants triangles whose violation stays below `limit`:
+/// false when the centroid sample alone shows that it does not (the fitted peak can only raise
+/// the deviation), with m->violation a lower bound >= limit and nothing else set; true with *m
+/// as MeasureTriangle gives it (whose violation may still reach the limit). Skips the
+/// edge-midpoint samples of a triangle already over the limit.
+bool MeasureTriangleBelow(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
+                          const FaceCriteria& criteria, double limit, TriangleMeasure* m);
 
 /// How well the triangle's 3D normal agrees with the surface normals at its corners (`normals`,
 /// oriented as Su x Sv): the smallest cosine between them. kInvalid when the (u,v) orientation

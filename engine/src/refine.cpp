@@ -108,10 +108,8 @@ class Refiner {
     measures->resize(tris.size());
     for (int k : *order) {
       m_.MeasureCorners(tris[k], uv, p);
-      double bound = CentroidViolation(s_, uv, p, c_);
-      if (bound >= limit) return bound;
       TriangleMeasure& m = (*measures)[k];
-      m = MeasureTriangle(s_, uv, p, c_);
+      if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m)) return m.violation;
       worst = std::max(worst, m.violation);
       if (worst >= limit) return worst;
       if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
