@@ -114,8 +114,10 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
     m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
     double hc = std::fabs(Dot(nh, cen - p[0]));
     if (hc > dev) dev = hc, m.worst_uv = cen_uv;
-    double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
-    m.rd = split / (0.5 * area2) - 1.0;
+    if (c.rd_tolerance > 0) {
+      double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
+      m.rd = split / (0.5 * area2) - 1.0;
+    }
   } else {
     // Degenerate in 3D. At a pole (two corners at one point) it vanishes from the output and
     // stands for nothing; otherwise it is a sliver: measure the surface against its segment.

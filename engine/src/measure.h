@@ -20,7 +20,8 @@ struct FaceCriteria {
 
 struct TriangleMeasure {
   double deviation = 0;   ///< model units
-  double rd = 0;          ///< area gain of a split at the centroid: RD estimate
+  double rd = 0;          ///< area gain of a split at the centroid: RD estimate; computed
+                          ///< only when FaceCriteria::rd_tolerance is on (0 otherwise)
   double max_length = 0;  ///< longest 3D edge
   double violation = 0;   ///< max over criteria of value / limit: <= 1 meets them all
   double agreement = 1;   ///< TriangleAgreement, when the caller measured it
