@@ -133,10 +133,11 @@ class CircleCurve final : public Curve {
 
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 
-// OCCT evaluator. A B-spline adaptor evaluates through a polynomial cache of one knot span and
-// rebuilds it whenever a point falls in another span, which refinement does all the time (a
-// triangle's samples straddle knot lines). So B-splines get a few adaptors, each kept on the span
-// it last served; the cache content depends only on the span, so the values are the same.
+// OCCT evaluator, with two speed-ups that keep OCCT's values bit for bit. A B-spline adaptor
+// evaluates through a polynomial cache of one knot span and rebuilds it whenever a point falls in
+// another span, which refinement does all the time (a triangle's samples straddle knot lines).
+// So B-splines get a few adaptors, each kept on the span it last served; the cache content
+// depends only on the span, so the values are the same. Spheres skip the adaptor's dispatch.
 class OcctSurface final : public Surface {
  public:
   explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {
