@@ -72,15 +72,15 @@ double FittedPeak(const Vec3 p[3], Vec3 nh, const Vec3 mid[3], double peak[3]) {
 
 }  // namespace
 
-TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
-                                const FaceCriteria& c) {
-  TriangleMeasure m;
-  Vec3 mid[3];
-  Vec2 mid_uv[3];
-  for (int i = 0; i < 3; ++i) {
-    mid_uv[i] = 0.5 * (uv[(i + 1) % 3] + uv[(i + 2) % 3]);
-    mid[i] = s.Point(mid_uv[i].x, mid_uv[i].y);
-  }
+namespace {
+
+// MeasureTriangle's work. With `may_stop` it returns false as soon as the centroid height alone
+// puts the violation at or above `limit` (the fitted peak can only raise the deviation); then
+// m->violation holds that lower bound and nothing else is set.
+bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& c, bool may_stop,
+             double limit, TriangleMeasure* out) {
+  TriangleMeasure& m = *out;
+  m = TriangleMeasure();
   Vec2 cen_uv = (1.0 / 3.0) * (uv[0] + uv[1] + uv[2]);
   Vec3 cen = s.Point(cen_uv.x, cen_uv.y);
   Vec3 n = Cross(p[1] - p[0], p[2] - p[0]);
@@ -88,9 +88,24 @@ TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
   double len2 = std::max({Dot(p[1] - p[0], p[1] - p[0]), Dot(p[2] - p[1], p[2] - p[1]),
                           Dot(p[0] - p[2], p[0] - p[2])});
   m.max_length = std::sqrt(len2);
+  const bool flat = area2 > 1e-10 * len2;  // not degenerate in 3D
+  if (may_stop && flat && c.max_deviation > 0 &&
+      !(c.min_length > 0 && m.max_length < 2 * c.min_length)) {
+    Vec3 nh = (1.0 / area2) * n;
+    double bound = std::fabs(Dot(nh, cen - p[0])) / c.max_deviation;
+    if (bound >= limit) {
+      m.violation = bound;
+      return false;
+    }
+  }
+  Vec3 mid[3];
+  for (int i = 0; i < 3; ++i) {
+    Vec2 mid_uv = 0.5 * (uv[(i + 1) % 3] + uv[(i + 2) % 3]);
+    mid[i] = s.Point(mid_uv.x, mid_uv.y);
+  }
   double dev = 0;
   m.worst_uv = cen_uv;
-  if (area2 > 1e-10 * len2) {
+  if (flat) {
     // Heights of the surface over the triangle's plane: at the centroid, and the peak of the
     // quadratic through the edge midpoints (exact for a quadratic patch).
     Vec3 nh = (1.0 / area2) * n;
@@ -99,8 +114,10 @@ TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
     m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
     double hc = std::fabs(Dot(nh, cen - p[0]));
     if (hc > dev) dev = hc, m.worst_uv = cen_uv;
-    double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
-    m.rd = split / (0.5 * area2) - 1.0;
+    if (c.rd_tolerance > 0) {
+      double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
+      m.rd = split / (0.5 * area2) - 1.0;
+    }
   } else {
     // Degenerate in 3D. At a pole (two corners at one point) it vanishes from the output and
     // stands for nothing; otherwise it is a sliver: measure the surface against its segment.
@@ -119,7 +136,21 @@ TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
   if (c.max_length > 0) v = std::max(v, m.max_length / c.max_length);
   if (c.min_length > 0 && m.max_length < 2 * c.min_length) v = std::min(v, 1.0);
   m.violation = v;
+  return true;
+}
+
+}  // namespace
+
+TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
+                                const FaceCriteria& c) {
+  TriangleMeasure m;
+  Measure(s, uv, p, c, false, 0, &m);
   return m;
+}
+
+bool MeasureTriangleBelow(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& c,
+                          double limit, TriangleMeasure* m) {
+  return Measure(s, uv, p, c, true, limit, m);
 }
 
 double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3]) {

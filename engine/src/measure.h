@@ -20,7 +20,8 @@ struct FaceCriteria {
 
 struct TriangleMeasure {
   double deviation = 0;   ///< model units
-  double rd = 0;          ///< area gain of a split at the centroid: RD estimate
+  double rd = 0;          ///< area gain of a split at the centroid: RD estimate; computed
+                          ///< only when FaceCriteria::rd_tolerance is on (0 otherwise)
   double max_length = 0;  ///< longest 3D edge
   double violation = 0;   ///< max over criteria of value / limit: <= 1 meets them all
   double agreement = 1;   ///< TriangleAgreement, when the caller measured it
@@ -30,6 +31,14 @@ struct TriangleMeasure {
 /// Measures the triangle with corners uv[i] / xyz[i] (xyz are the nodes' mesh positions).
 TriangleMeasure MeasureTriangle(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
                                 const FaceCriteria& criteria);
+
+/// MeasureTriangle for a caller that only wants triangles whose violation stays below `limit`:
+/// false when the centroid sample alone shows that it does not (the fitted peak can only raise
+/// the deviation), with m->violation a lower bound >= limit and nothing else set; true with *m
+/// as MeasureTriangle gives it (whose violation may still reach the limit). Skips the
+/// edge-midpoint samples of a triangle already over the limit.
+bool MeasureTriangleBelow(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
+                          const FaceCriteria& criteria, double limit, TriangleMeasure* m);
 
 /// How well the triangle's 3D normal agrees with the surface normals at its corners (`normals`,
 /// oriented as Su x Sv): the smallest cosine between them. kInvalid when the (u,v) orientation

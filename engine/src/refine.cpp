@@ -103,23 +103,21 @@ class Refiner {
   // Evaluate(tris).max_violation for a smoothing probe of node v, HUGE_VAL when AgreementOk
   // fails. Once the probe shows it cannot win (the running maximum reaches `limit`, or the fold
   // guard fails) it returns a value >= limit. v's surface normal is evaluated only when the fold
-  // guard is first needed. Measuring starts at triangle *first, which then becomes the worst one
-  // of a full measurement.
-  // A full measurement leaves in `measures` what Evaluate(tris).measures would hold.
+  // guard is first needed. Triangles are measured in `order` (worst first at the last full
+  // measurement, which reorders it); a full measurement leaves in `measures` what
+  // Evaluate(tris).measures would hold.
   double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
-                       size_t* first, std::vector<TriangleMeasure>* measures) {
+                       std::vector<int>* order, std::vector<TriangleMeasure>* measures) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
     double min_agreement = 1, worst = 0;
-    size_t worst_k = *first;
     bool normal_ready = false;
     measures->resize(tris.size());
-    for (size_t j = 0; j < tris.size(); ++j) {
-      size_t k = (*first + j) % tris.size();
+    for (int k : *order) {
       m_.MeasureCorners(tris[k], uv, p);
       TriangleMeasure& m = (*measures)[k];
-      m = MeasureTriangle(s_, uv, p, c_);
-      if (m.violation > worst) worst = m.violation, worst_k = k;
+      if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m)) return m.violation;
+      worst = std::max(worst, m.violation);
       if (worst >= limit) return worst;
       if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
       Corners(tris[k], uv, p, n);
@@ -128,7 +126,9 @@ class Refiner {
       min_agreement = std::min(min_agreement, agreement);
       if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
     }
-    *first = worst_k;
+    std::stable_sort(order->begin(), order->end(), [&](int a, int b) {
+      return (*measures)[a].violation > (*measures)[b].violation;
+    });
     return worst;
   }
   // A folded triangle (its normal against the surface's) must be refined whatever it deviates.
@@ -644,9 +644,11 @@ bool Refiner::SmoothNode(int v) {
     r += std::hypot(d.x * su_, d.y * sv_);
   }
   r /= nv.size();
-  size_t worst_first = 0;  // the ring triangle that was worst at the last full measurement
-  for (size_t k = 1; k < ring.size(); ++k)
-    if (measure_[ring[k]].violation > measure_[ring[worst_first]].violation) worst_first = k;
+  std::vector<int> order(ring.size());  // ring triangles, worst first
+  for (size_t k = 0; k < ring.size(); ++k) order[k] = static_cast<int>(k);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return measure_[ring[a]].violation > measure_[ring[b]].violation;
+  });
   // The search ends at the last probe measured in full (every other value is an upper bound
   // that lost), so that probe's point, normal and measures are the result's.
   std::vector<TriangleMeasure> measures, best_measures;
@@ -656,7 +658,7 @@ bool Refiner::SmoothNode(int v) {
     for (const Tri& nt : tris)
       if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
     m_.xyz[v] = s_.Point(q.x, q.y);  // RingViolation evaluates the normal when it needs it
-    double worst = RingViolation(tris, v, old_agree, -bound, &worst_first, &measures);
+    double worst = RingViolation(tris, v, old_agree, -bound, &order, &measures);
     if (worst < -bound) best_xyz = m_.xyz[v], best_normal = m_.normal[v], best_measures = measures;
     return -worst;
   };

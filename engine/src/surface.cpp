@@ -9,9 +9,12 @@
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <gp_Pnt.hxx>
+#include <gp_Sphere.hxx>
 #include <gp_Vec.hxx>
 #include <vector>
 
@@ -130,13 +133,22 @@ class CircleCurve final : public Curve {
 
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 
-// OCCT evaluator. A B-spline adaptor evaluates through a polynomial cache of one knot span and
-// rebuilds it whenever a point falls in another span, which refinement does all the time (a
-// triangle's samples straddle knot lines). So B-splines get a few adaptors, each kept on the span
-// it last served; the cache content depends only on the span, so the values are the same.
+// OCCT evaluator, with two speed-ups that keep OCCT's values bit for bit. A B-spline adaptor
+// evaluates through a polynomial cache of one knot span and rebuilds it whenever a point falls in
+// another span, which refinement does all the time (a triangle's samples straddle knot lines).
+// So B-splines get a few adaptors, each kept on the span it last served; the cache content
+// depends only on the span, so the values are the same. Spheres skip the adaptor's dispatch.
 class OcctSurface final : public Surface {
  public:
   explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {
+    if (adaptor_.GetType() == GeomAbs_Sphere) {
+      gp_Sphere sphere = adaptor_.Sphere();
+      const gp_Ax3& pos = sphere.Position();
+      sphere_ = {pos.XDirection().XYZ(), pos.YDirection().XYZ(), pos.Direction().XYZ(),
+                 pos.Location().XYZ()};
+      radius_ = sphere.Radius();
+      is_sphere_ = true;
+    }
     if (adaptor_.GetType() != GeomAbs_BSplineSurface) return;
     Handle(Geom_BSplineSurface) bspline = adaptor_.BSpline();
     for (int i = 1; i <= bspline->NbUKnots(); ++i) uknots_.push_back(bspline->UKnot(i));
@@ -144,7 +156,10 @@ class OcctSurface final : public Surface {
     spans_.resize(kSpans);
     for (Span& span : spans_) span.adaptor.Load(surface);
   }
-  Vec3 Point(double u, double v) override { return ToVec(Adaptor(u, v).Value(u, v)); }
+  Vec3 Point(double u, double v) override {
+    if (is_sphere_) return SpherePoint(u, v);
+    return ToVec(Adaptor(u, v).Value(u, v));
+  }
   Vec3 Normal(double u, double v) override {
     gp_Pnt p;
     gp_Vec su, sv;
@@ -159,6 +174,19 @@ class OcctSurface final : public Surface {
   }
 
  private:
+  // OCCT's sphere evaluation (ElSLib::SphereD0) without the adaptor's dispatch: the same
+  // arithmetic in the same order, so the same bits (surface_test checks it).
+  Vec3 SpherePoint(double u, double v) const {
+    const gp_XYZ &x = sphere_[0], &y = sphere_[1], &z = sphere_[2], &o = sphere_[3];
+    double r = radius_ * std::cos(v);
+    double a3 = radius_ * std::sin(v);
+    double a1 = r * std::cos(u);
+    double a2 = r * std::sin(u);
+    return {a1 * x.X() + a2 * y.X() + a3 * z.X() + o.X(),
+            a1 * x.Y() + a2 * y.Y() + a3 * z.Y() + o.Y(),
+            a1 * x.Z() + a2 * y.Z() + a3 * z.Z() + o.Z()};
+  }
+
   static constexpr int kSpans = 8;
   struct Span {
     double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // its knot span: [u0, u1) x [v0, v1)
@@ -191,6 +219,9 @@ class OcctSurface final : public Surface {
   }
 
   GeomAdaptor_Surface adaptor_;
+  bool is_sphere_ = false;
+  std::array<gp_XYZ, 4> sphere_;  // x, y and z directions and centre of a sphere
+  double radius_ = 0;
   std::vector<double> uknots_, vknots_;  // distinct knots of a B-spline
   std::vector<Span> spans_;              // empty unless B-spline
   uint64_t clock_ = 0;

@@ -4,7 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepBuilderAPI_Transform.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
+#include <BRep_Tool.hxx>
+#include <GeomAdaptor_Surface.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <algorithm>
@@ -57,6 +61,9 @@ TEST(SurfaceTest, BSplineValuesDoNotDependOnTheEvaluationOrder) {
     ASSERT_TRUE(SameBits(pa[i], b->Point(q.x, q.y)));
     ASSERT_TRUE(SameBits(na[i], b->Normal(q.x, q.y)));
   }
+  // Normals first on a fresh evaluator (its span adaptors see D1 before any D0).
+  std::unique_ptr<Surface> c = MakeFaceSurface(face, true);
+  for (int i : order) ASSERT_TRUE(SameBits(na[i], c->Normal(points[i].x, points[i].y)));
   for (int i = 0; i < 20; ++i) {
     std::unique_ptr<Surface> fresh = MakeFaceSurface(face, true);
     const Vec2& q = points[order[i]];
@@ -66,6 +73,22 @@ TEST(SurfaceTest, BSplineValuesDoNotDependOnTheEvaluationOrder) {
   for (const Vec3& p : pa) {
     double ring = std::hypot(p.x, p.y) - 3.0;
     EXPECT_NEAR(std::hypot(ring, p.z), 1.0, 1e-6);
+  }
+}
+
+TEST(SurfaceTest, SphereMatchesOcctBitForBit) {
+  gp_Trsf move;
+  move.SetRotation(gp_Ax1(gp_Pnt(1, 2, 3), gp_Dir(1, 1, 0.3)), 0.7);
+  move.SetTranslationPart(gp_Vec(-4.5, 0.25, 12));
+  TopoDS_Shape sphere =
+      BRepBuilderAPI_Transform(BRepPrimAPI_MakeSphere(gp_Pnt(0.3, -2, 1), 7.25).Shape(), move);
+  TopoDS_Face face = TopoDS::Face(TopExp_Explorer(sphere, TopAbs_FACE).Current());
+  std::unique_ptr<Surface> ours = MakeFaceSurface(face, false);
+  GeomAdaptor_Surface occt(BRep_Tool::Surface(face));
+  ASSERT_EQ(occt.GetType(), GeomAbs_Sphere);
+  for (const Vec2& q : Samples(*ours, 5000, 4)) {
+    gp_Pnt p = occt.Value(q.x, q.y);
+    ASSERT_TRUE(SameBits(ours->Point(q.x, q.y), {p.X(), p.Y(), p.Z()}));
   }
 }
 
