@@ -34,23 +34,11 @@
 #include "heal.h"
 #include "model.h"
 #include "rdmesh/engine.h"
+#include "shape_fixture.h"
 #include "surface.h"
 
 namespace rdmesh {
 namespace {
-
-namespace fs = std::filesystem;
-
-std::shared_ptr<const Model> LoadShape(const TopoDS_Shape& shape, const std::string& name) {
-  std::string path = (fs::temp_directory_path() /
-                      ("rdmesh_domain_" + std::to_string(::getpid()) + "_" + name + ".brep"))
-                         .string();
-  BRepTools::Write(shape, path.c_str());
-  auto model = LoadModel(path);
-  fs::remove(path);
-  EXPECT_TRUE(model.ok()) << model.status().ToString();
-  return model.ok() ? *model : nullptr;
-}
 
 std::vector<EdgeGrid> Grids(const Model& model, double max_deviation) {
   GridCriteria criteria;

@@ -26,22 +26,10 @@
 #include <string>
 
 #include "rdmesh/engine.h"
+#include "shape_fixture.h"
 
 namespace rdmesh {
 namespace {
-
-namespace fs = std::filesystem;
-
-std::shared_ptr<const Model> LoadShape(const TopoDS_Shape& shape, const std::string& name) {
-  std::string path = (fs::temp_directory_path() /
-                      ("rdmesh_pipeline_" + std::to_string(::getpid()) + "_" + name + ".brep"))
-                         .string();
-  BRepTools::Write(shape, path.c_str());
-  auto model = LoadModel(path);
-  fs::remove(path);
-  EXPECT_TRUE(model.ok()) << model.status().ToString();
-  return model.ok() ? *model : nullptr;
-}
 
 std::shared_ptr<const Model> LoadData(const std::string& file) {
   auto model = LoadModel(std::string(RDMESH_TEST_DATA) + "/" + file);

@@ -1,0 +1,29 @@
+#pragma once
+// Loads an in-memory OCCT shape through the engine's own reader (via a temporary .brep file), so
+// tests build B-reps with BRepBuilderAPI / BRepPrimAPI and mesh them like a user's file.
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <BRepTools.hxx>
+#include <TopoDS_Shape.hxx>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "rdmesh/engine.h"
+
+namespace rdmesh {
+
+inline std::shared_ptr<const Model> LoadShape(const TopoDS_Shape& shape, const std::string& name) {
+  std::string path = (std::filesystem::temp_directory_path() /
+                      ("rdmesh_test_" + std::to_string(::getpid()) + "_" + name + ".brep"))
+                         .string();
+  BRepTools::Write(shape, path.c_str());
+  auto model = LoadModel(path);
+  std::filesystem::remove(path);
+  EXPECT_TRUE(model.ok()) << model.status().ToString();
+  return model.ok() ? *model : nullptr;
+}
+
+}  // namespace rdmesh
