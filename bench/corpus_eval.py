@@ -24,11 +24,12 @@ def main():
     ap.add_argument("--rdmesh", default=os.path.join(HERE, "..", "build", "bin", "rdmesh"))
     ap.add_argument("--rel", type=float, default=1e-3, help="--max-deviation-rel (default 1e-3)")
     ap.add_argument("--out", default="/tmp/rdmesh-corpus", help="directory for meshes and JSON")
-    ap.add_argument("--yardstick", default=os.path.join(SHARED, "yardstick"))
     ap.add_argument("models", nargs="*", help="default: every ../shared/corpus/*.st*p")
     a = ap.parse_args()
-    subprocess.run([os.path.join(a.yardstick, "build.sh")], check=True)
-    meshbench = os.path.join(a.yardstick, "meshbench")
+    # The shared yardstick may be read-only: scripts/yardstick.sh builds a copy to run.
+    built = subprocess.run(["sh", os.path.join(HERE, "..", "scripts", "yardstick.sh")], check=True,
+                           capture_output=True, text=True).stdout.strip().splitlines()[-1]
+    meshbench = os.path.join(built, "meshbench")
     models = a.models or sorted(glob.glob(os.path.join(SHARED, "corpus", "*.st*p")))
     os.makedirs(a.out, exist_ok=True)
     clean = 0

@@ -556,7 +556,11 @@ def main():
 
     a.brepmesh_runner = os.path.join(a.build_dir, "bin", "brepmesh_runner")
     a.meshers = [m.strip() for m in a.meshers.split(",") if m.strip()]
-    subprocess.run([os.path.join(YARD, "build.sh")], check=True)
+    # The shared yardstick may be read-only: scripts/yardstick.sh builds a copy to run.
+    global MESHBENCH, ANCHORS
+    built = subprocess.run(["sh", os.path.join(REPO, "scripts", "yardstick.sh")], check=True,
+                           capture_output=True, text=True).stdout.strip().splitlines()[-1]
+    MESHBENCH, ANCHORS = os.path.join(built, "meshbench"), os.path.join(built, "anchors.py")
     if not a.no_build:
         cmake_build(REPO, a.build_dir, ["brepmesh_runner"] + (["rdmesh"] if a.rdmesh_rev == "worktree" else []))
     a.measured_rev = "working tree"

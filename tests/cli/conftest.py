@@ -94,9 +94,13 @@ def gltf_validate():
 @pytest.fixture(scope="session")
 def meshbench(shared_dir):
     """The independent yardstick scorer: `meshbench eval MODEL MESH.msh` -> dict."""
-    yardstick = shared_dir / "yardstick"
-    subprocess.run(["sh", str(yardstick / "build.sh")], check=True, capture_output=True,
-                   timeout=900)
+    # scripts/yardstick.sh builds a copy in a writable place: the shared one may be read-only.
+    env = dict(os.environ, RDMESH_SHARED=str(shared_dir))
+    script = pathlib.Path(__file__).resolve().parents[2] / "scripts" / "yardstick.sh"
+    built = subprocess.run(["sh", str(script)], env=env, capture_output=True, text=True,
+                           timeout=900)
+    assert built.returncode == 0, built.stderr
+    yardstick = pathlib.Path(built.stdout.strip().splitlines()[-1])
 
     def evaluate(model, mesh):
         completed = subprocess.run([str(yardstick / "meshbench"), "eval", str(model), str(mesh)],
