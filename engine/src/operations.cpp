@@ -217,6 +217,29 @@ bool FlipTris(const WorkMesh& m, int t, int i, std::vector<int>* cavity, std::ve
   return true;
 }
 
+bool FlipOuterEdgeTris(const WorkMesh& m, const std::vector<int>& cavity, const Tri& child, int n,
+                       int* w, Tri out[2]) {
+  int k = child[0] == n ? 0 : child[1] == n ? 1 : child[2] == n ? 2 : -1;
+  if (k < 0) return false;
+  const int a = child[(k + 1) % 3], b = child[(k + 2) % 3];
+  // The cavity triangle that holds the directed edge a->b; its neighbour there is w.
+  for (int t : cavity) {
+    int i = m.CornerOf(t, a);
+    if (i < 0 || m.tri[t][(i + 1) % 3] != b) continue;
+    int e = (i + 2) % 3;  // the edge a->b lies opposite this corner
+    *w = m.nbr[t][e];
+    if (*w < 0 || m.kind[t][e] != EdgeKind::kFree ||
+        std::find(cavity.begin(), cavity.end(), *w) != cavity.end())
+      return false;
+    // w holds b->a; c is its third corner. The quad a, c, b, n takes the diagonal n-c.
+    const int c = m.tri[*w][(m.CornerOf(*w, a) + 1) % 3];
+    out[0] = {a, c, n};
+    out[1] = {c, b, n};
+    return true;
+  }
+  return false;
+}
+
 void CollapseTris(const WorkMesh& m, int v, int w, std::vector<int>* cavity,
                   std::vector<Tri>* tris) {
   *cavity = m.Ring(v);

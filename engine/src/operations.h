@@ -77,6 +77,12 @@ void SplitEdgeTris(const WorkMesh& mesh, int t, int i, int n, std::vector<int>* 
 /// The two triangles that replace t and its neighbour across edge i when that edge is flipped.
 /// False when there is no neighbour.
 bool FlipTris(const WorkMesh& mesh, int t, int i, std::vector<int>* cavity, std::vector<Tri>* tris);
+/// For `child`, a new triangle of a cavity replacement with node n at one corner: flipping its
+/// outer edge (the one without n, on the border of `cavity`) with the triangle w beyond it.
+/// Gives w and the two triangles that replace child and w. False when that edge is not free or
+/// w is missing or already in the cavity.
+bool FlipOuterEdgeTris(const WorkMesh& mesh, const std::vector<int>& cavity, const Tri& child,
+                       int n, int* w, Tri out[2]);
 /// The triangles around v after collapsing v into its neighbour w (the two triangles on the
 /// edge v-w disappear).
 void CollapseTris(const WorkMesh& mesh, int v, int w, std::vector<int>* cavity,

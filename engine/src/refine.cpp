@@ -221,6 +221,7 @@ class Refiner {
   bool SmoothNode(int v);
   bool SplitTriangle(int t);
   bool SplitEdge(int t, int i);
+  bool RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* tris, Candidate* cand);
   bool TryFlip(int t, int i);
   void Legalize(int node);
   int CollapsePass();
@@ -239,6 +240,7 @@ class Refiner {
   bool splitting_ = false;    // Apply() is applying a split
   std::vector<uint8_t> gen_;  // per triangle: split generation
   bool sliver_recursion_ = false;
+  bool rescue_ = false;  // splits may flip folded children's outer edges (RescueSplit)
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
 };
 
@@ -257,24 +259,33 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
     if (measure_[t].violation > 1) Push(t);
   }
   int64_t ops = 0;
-  while (!queue_.empty()) {
-    auto [violation, t, stamp] = queue_.top();
-    queue_.pop();
-    if (!m_.alive[t] || stamp != stamp_[t]) continue;
-    if (violation <= 1) break;
-    if (m_.TriangleCount() >= max_triangles) {
-      stats_.budget_hit = true;
-      break;
+  // Plain splits first; then the triangles they left violating get splits with flips too
+  // (RescueSplit), which only they need.
+  for (int phase = 0; phase < 2 && !stats_.budget_hit; ++phase) {
+    rescue_ = phase == 1;
+    if (rescue_)
+      for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t)
+        if (m_.alive[t] && measure_[t].violation > 1) Push(t);
+    while (!queue_.empty()) {
+      auto [violation, t, stamp] = queue_.top();
+      queue_.pop();
+      if (!m_.alive[t] || stamp != stamp_[t]) continue;
+      if (violation <= 1) break;
+      if (m_.TriangleCount() >= max_triangles) {
+        stats_.budget_hit = true;
+        break;
+      }
+      if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
+      // No progress here: leave it; Finish() reports it through max_violation.
+      if (gen_[t] >= kMaxGeneration) continue;
+      splitting_ = true;
+      SplitTriangle(t);
+      splitting_ = false;
     }
-    if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
-    // No progress here: leave it; Finish() reports it through max_violation.
-    if (gen_[t] >= kMaxGeneration) continue;
-    splitting_ = true;
-    SplitTriangle(t);
-    splitting_ = false;
+    queue_ = {};
   }
+  rescue_ = false;
   refining_ = false;
-  queue_ = {};
   return Status::Ok();
 }
 
@@ -391,10 +402,12 @@ bool Refiner::SplitTriangle(int t) {
       DropLastNode();
       continue;
     }
+    std::vector<int> cavity = {t};
     std::vector<Tri> tris = SplitTriangleTris(m_, t, node);
     Candidate cand = Evaluate(tris);
-    if (SplitOk(cand.min_agreement, {t})) {
-      Apply({t}, tris, cand);
+    if (SplitOk(cand.min_agreement, cavity) ||
+        (rescue_ && RescueSplit(node, &cavity, &tris, &cand))) {
+      Apply(cavity, tris, cand);
       ++stats_.splits;
       Legalize(node);
       return true;
@@ -447,13 +460,41 @@ bool Refiner::SplitEdge(int t, int i) {
   int node = pole ? NewNode(place(s_best), true, b) : NewNode(place(s_best));
   SplitEdgeTris(m_, t, i, node, &cavity, &tris);
   Candidate cand = Evaluate(tris);
-  if (!SplitOk(cand.min_agreement, cavity)) {
+  if (!SplitOk(cand.min_agreement, cavity) &&
+      !(rescue_ && RescueSplit(node, &cavity, &tris, &cand))) {
     DropLastNode();
     return false;
   }
   Apply(cavity, tris, cand);
   ++stats_.edge_splits;
   Legalize(node);
+  return true;
+}
+
+// A split of a triangle whose long edges cut across a curved surface can fold a child that
+// leans on such an edge, whatever point it takes. Flipping each folded child's outer edge
+// together with the split, as one operation, gives the children the node beyond instead.
+bool Refiner::RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* tris,
+                          Candidate* cand) {
+  std::vector<int> cav = *cavity;
+  std::vector<Tri> nt = *tris;
+  const size_t children = nt.size();
+  for (size_t k = 0; k < children; ++k) {
+    if (cand->measures[k].agreement > 0) continue;
+    int w;
+    Tri out[2];
+    if (!FlipOuterEdgeTris(m_, cav, nt[k], node, &w, out)) return false;
+    for (const Tri& x : out)
+      if (!(Orient(m_.uv[x[0]], m_.uv[x[1]], m_.uv[x[2]]) > 0)) return false;
+    nt[k] = out[0];
+    nt.push_back(out[1]);
+    cav.push_back(w);
+  }
+  if (nt.size() == children) return false;
+  Candidate c = Evaluate(nt);
+  if (!SplitOk(c.min_agreement, cav)) return false;
+  *cavity = std::move(cav), *tris = std::move(nt), *cand = std::move(c);
+  ++stats_.rescues;
   return true;
 }
 

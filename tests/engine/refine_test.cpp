@@ -63,6 +63,47 @@ TEST(RefineTest, CylinderUsesLongTrianglesAlongRulings) {
   EXPECT_LE(measured, 1.05 * delta);
 }
 
+TEST(RefineTest, SplitsThatFoldEveryChildAreRescuedByFlips) {
+  // A strip of a cylinder r = 10 spanning 82 degrees, with a notch in one long side, and its
+  // initial triangulation (from nist_ctc_02, face 64). Triangle 8-1-2 runs from one long side
+  // to the notch corner; with plain splits refinement gets stuck on it, as every split folds a
+  // child that leans on a long edge. Splits that flip such children's outer edges refine it.
+  AnalyticFace f;
+  f.surface = MakeCylinderSurface(10.0);
+  Surface& s = *f.surface;
+  const Vec2 uv[12] = {{4.62512, 293.532}, {4.62512, 313.612}, {4.53093, 315.140},
+                       {4.53093, 344.860}, {4.62512, 346.388}, {4.62512, 360.468},
+                       {3.90954, 360.468}, {3.19395, 360.468}, {3.19395, 293.532},
+                       {3.90954, 293.532}, {3.43248, 327.000}, {3.90954, 327.000}};
+  s.umin = 3.19395, s.umax = 4.62512, s.vmin = 293.532, s.vmax = 360.468;
+  for (int v = 0; v < 12; ++v)
+    f.mesh.AddNode(uv[v], s.Point(uv[v].x, uv[v].y), s.Normal(uv[v].x, uv[v].y), v < 10,
+                   v < 10 ? NodeRef{0, v + 1, 0} : NodeRef{});
+  const std::vector<std::array<int, 3>> tris = {{3, 6, 7},  {8, 1, 2},   {3, 7, 10},  {4, 5, 6},
+                                                {4, 6, 3},  {10, 7, 8},  {1, 9, 0},   {1, 8, 9},
+                                                {2, 10, 8}, {11, 3, 10}, {2, 11, 10}, {2, 3, 11}};
+  // Boundary edges: consecutive nodes of the loop 0..9.
+  std::vector<std::array<bool, 3>> constrained;
+  for (const auto& t : tris) {
+    std::array<bool, 3> c{};
+    for (int i = 0; i < 3; ++i) {
+      int a = t[(i + 1) % 3], b = t[(i + 2) % 3];
+      c[i] = a < 10 && b < 10 && (b == (a + 1) % 10 || a == (b + 1) % 10);
+    }
+    constrained.push_back(c);
+  }
+  InitWorkMesh(tris, constrained, {}, &f.mesh);
+  FaceCriteria face;
+  face.max_deviation = 1.167;
+  RefineFace(&f.mesh, s, face, 10.0, 1.0, 200000, true, nullptr, &f.stats);
+  EXPECT_GT(f.stats.rescues, 0);
+  EXPECT_LE(f.stats.max_violation, 1.0);
+  double measured =
+      f.MeasuredDeviation([](Vec3 p) { return std::fabs(std::hypot(p.x, p.y) - 10.0); });
+  EXPECT_LE(measured, 1.05 * face.max_deviation);
+  EXPECT_LE(f.OutputTriangles(), 24);
+}
+
 TEST(RefineTest, SphereNearTheoreticalMinimum) {
   // Unit sphere at 1e-3 of its bbox diagonal: the optimum is 2 * 2.418 / delta triangles.
   const double delta = 1e-3 * 2 * std::sqrt(3.0);
