@@ -492,7 +492,8 @@ bool Refiner::RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* 
   }
   if (nt.size() == children) return false;
   Candidate c = Evaluate(nt);
-  if (!SplitOk(c.min_agreement, cav)) return false;
+  // A last resort must make progress: the worst triangle gets better.
+  if (!SplitOk(c.min_agreement, cav) || !(c.max_violation < MaxViolation(cav))) return false;
   *cavity = std::move(cav), *tris = std::move(nt), *cand = std::move(c);
   ++stats_.rescues;
   return true;
