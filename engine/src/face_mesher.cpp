@@ -11,6 +11,7 @@
 #include "operations.h"
 #include "refine.h"
 #include "surface.h"
+#include "unfold.h"
 
 namespace rdmesh {
 
@@ -97,6 +98,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     for (size_t s = 0; s < domain.segments.size(); ++s)
       if (domain.segment_splittable[s]) splittable.push_back(domain.segments[s]);
     InitWorkMesh(cdt.triangles, cdt.constrained, splittable, &m);
+    UnfoldInitialMesh(&m, *surface, domain.scale_u, domain.scale_v);
     RefineStats stats;
     st = RefineFace(&m, *surface, job.criteria, domain.scale_u, domain.scale_v, job.max_triangles,
                     job.improve, context, &stats);
