@@ -11,6 +11,7 @@
 #include "operations.h"
 #include "refine.h"
 #include "surface.h"
+#include "unfold.h"
 
 namespace rdmesh {
 
@@ -97,9 +98,20 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     for (size_t s = 0; s < domain.segments.size(); ++s)
       if (domain.segment_splittable[s]) splittable.push_back(domain.segments[s]);
     InitWorkMesh(cdt.triangles, cdt.constrained, splittable, &m);
+    // A first triangulation that folds is usually refined out of it; where refinement stays
+    // stuck (criteria missed), the face is refined again from the unfolded triangulation and the
+    // better result kept.
+    WorkMesh first = m;
     RefineStats stats;
     st = RefineFace(&m, *surface, job.criteria, domain.scale_u, domain.scale_v, job.max_triangles,
                     job.improve, context, &stats);
+    if (st.ok() && stats.max_violation > 1.0 + 1e-9 && !stats.budget_hit &&
+        UnfoldInitialMesh(&first, *surface, domain.scale_u, domain.scale_v) >= 0) {
+      RefineStats again;
+      st = RefineFace(&first, *surface, job.criteria, domain.scale_u, domain.scale_v,
+                      job.max_triangles, job.improve, context, &again);
+      if (st.ok() && again.max_violation < stats.max_violation) m = std::move(first), stats = again;
+    }
     if (!st.ok()) {
       f.status = FaceStatus::kSkipped;
       f.reason = st.message();

@@ -33,6 +33,15 @@ void WorkMesh::MeasureCorners(const std::array<int, 3>& t, Vec2 q[3], Vec3 x[3])
 
 void WorkMesh::MeasureCorners(int t, Vec2 q[3], Vec3 x[3]) const { MeasureCorners(tri[t], q, x); }
 
+void WorkMesh::FoldCorners(const std::array<int, 3>& t, Vec2 q[3], Vec3 x[3], Vec3 n[3]) const {
+  for (int i = 0; i < 3; ++i) q[i] = uv[t[i]], x[i] = xyz[t[i]], n[i] = normal[t[i]];
+  for (int i = 0; i < 3; ++i) {
+    int j = t[(i + 1) % 3], k = t[(i + 2) % 3];
+    if (pole_axis[t[i]] >= 0 && pole_axis[j] < 0 && pole_axis[k] < 0)
+      n[i] = Normalized(normal[j] + normal[k]);
+  }
+}
+
 int WorkMesh::TriangleCount() const {
   // Every dead slot is in free_slots (ReplaceCavity keeps it so).
   return static_cast<int>(tri.size() - free_slots.size());

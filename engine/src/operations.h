@@ -44,6 +44,10 @@ struct WorkMesh {
   /// one the 3D triangle stands for.
   void MeasureCorners(int t, Vec2 uv[3], Vec3 xyz[3]) const;
   void MeasureCorners(const std::array<int, 3>& t, Vec2 uv[3], Vec3 xyz[3]) const;
+  /// The corners of triangle t for the fold guard (TriangleAgreement). The surface normal at a
+  /// pole depends on the direction it is approached from, so a pole corner takes its
+  /// neighbours' mean normal.
+  void FoldCorners(const std::array<int, 3>& t, Vec2 uv[3], Vec3 xyz[3], Vec3 normals[3]) const;
   /// Live triangle count.
   int TriangleCount() const;
   /// The corner of triangle t that holds node v, or -1.

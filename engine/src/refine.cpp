@@ -45,15 +45,9 @@ class Refiner {
     double min_agreement = 1;
   };
 
-  // Corners of a triangle for the fold guard. The surface normal at a pole depends on the
-  // direction it is approached from, so a pole corner takes its neighbours' mean normal.
+  // Corners of a triangle for the fold guard (pole corners take their neighbours' mean normal).
   void Corners(const Tri& t, Vec2 uv[3], Vec3 p[3], Vec3 n[3]) const {
-    for (int i = 0; i < 3; ++i) uv[i] = m_.uv[t[i]], p[i] = m_.xyz[t[i]], n[i] = m_.normal[t[i]];
-    for (int i = 0; i < 3; ++i) {
-      int j = t[(i + 1) % 3], k = t[(i + 2) % 3];
-      if (m_.pole_axis[t[i]] >= 0 && m_.pole_axis[j] < 0 && m_.pole_axis[k] < 0)
-        n[i] = Normalized(m_.normal[j] + m_.normal[k]);
-    }
+    m_.FoldCorners(t, uv, p, n);
   }
   Candidate Evaluate(const std::vector<Tri>& tris) {
     Candidate cand;
