@@ -70,13 +70,133 @@ double FittedPeak(const Vec3 p[3], Vec3 nh, const Vec3 mid[3], double peak[3]) {
   return fitted;
 }
 
+// Knot lines followed across one triangle in one direction: at most this many are listed.
+constexpr int kMaxKnots = 16;
+// An edge cut by knot lines into up to kEdgePieces pieces is sampled at the quarter points of
+// each; one cut into more (it is long against the knot spacing) at kEdgeSteps even steps.
+// Likewise strips of the triangle between knot lines: halved up to kStripPieces, else
+// kStripSteps even strips. Fewer samples for many pieces keep the cost bounded on densely
+// knotted surfaces, whose pieces are small against the triangle anyway.
+constexpr int kEdgePieces = 4, kEdgeSteps = 3, kStripPieces = 2, kStripSteps = 2;
+
+// The knot lines of `k` strictly inside (lo, hi), ascending, into at[]: their count, or
+// kMaxKnots + 1 when there are more (then at[] holds the first ones only).
+int KnotsWithin(const Surface::KnotLines& k, double lo, double hi, double* at) {
+  int n = 0;
+  if (k.at.empty() || !(lo < hi)) return 0;
+  double first = 0, last = 0;  // the periods to shift the knots by
+  if (k.period > 0) {
+    first = std::floor((lo - k.at.back()) / k.period);
+    last = std::ceil((hi - k.at.front()) / k.period);
+  }
+  for (double shift = first; shift <= last; ++shift) {
+    double offset = shift * k.period;
+    auto it = std::upper_bound(k.at.begin(), k.at.end(), lo - offset);
+    for (; it != k.at.end() && *it + offset < hi; ++it) {
+      if (n > kMaxKnots) return n;
+      if (n == 0 || *it + offset > at[n - 1]) at[n++] = *it + offset;
+    }
+  }
+  return n;
+}
+
+// Where to sample [cut[0], cut[pieces]], cut into polynomial pieces at cut[1..pieces): into
+// out[] as (start, end) pairs whose middles are the samples, both halves of every piece (a cubic
+// piece may bulge both ways) when there are at most max_pieces, else `steps` even intervals.
+// Returns the number of intervals.
+int Intervals(const double* cut, int pieces, int max_pieces, int steps, double* out) {
+  int n = 0;
+  if (pieces <= max_pieces) {
+    for (int k = 0; k < pieces; ++k) {
+      double mid = 0.5 * (cut[k] + cut[k + 1]);
+      out[n++] = cut[k], out[n++] = mid, out[n++] = mid, out[n++] = cut[k + 1];
+    }
+  } else {
+    double lo = cut[0], hi = cut[pieces];
+    for (int k = 0; k < steps; ++k)
+      out[n++] = lo + (hi - lo) * k / steps, out[n++] = lo + (hi - lo) * (k + 1) / steps;
+  }
+  return n / 2;
+}
+
+// The part of the polygon poly[0..n) where sign * coordinate(axis) <= bound, into out[]:
+// returns its vertex count.
+int ClipPolygon(const Vec2* poly, int n, bool axis_v, double sign, double bound, Vec2* out) {
+  int m = 0;
+  auto f = [&](Vec2 q) { return sign * (axis_v ? q.y : q.x) - bound; };
+  for (int i = 0; i < n; ++i) {
+    Vec2 a = poly[i], b = poly[(i + 1) % n];
+    double fa = f(a), fb = f(b);
+    if (fa <= 0) out[m++] = a;
+    if ((fa < 0 && fb > 0) || (fa > 0 && fb < 0)) out[m++] = a + (fa / (fa - fb)) * (b - a);
+  }
+  return m;
+}
+
+// The largest height over the plane (p0, nh) of extra samples for a triangle that crosses knot
+// lines, where the one quadratic of FittedPeak cannot follow the surface: each polynomial piece
+// may bulge on its own, a cubic one even both ways. Samples along each edge that crosses knot
+// lines (both triangles of the edge share them: they do not depend on its direction), and
+// across the triangle in strips between the knot lines of one direction (at each strip's vertex
+// mean), as Intervals places them. Returns 0, leaving *where, when no knot line crosses it.
+double KnotPeak(Surface& s, const Vec2 uv[3], Vec3 p0, Vec3 nh, Vec2* where) {
+  if (s.uknots.at.empty() && s.vknots.at.empty()) return 0;
+  double best = 0;
+  auto sample = [&](Vec2 q) {
+    double h = std::fabs(Dot(nh, s.Point(q.x, q.y) - p0));
+    if (h > best) best = h, *where = q;
+  };
+  double cut[2 * kMaxKnots + 4], interval[4 * kMaxKnots + 8];  // 2 x (pieces + 1) bounds
+  for (int i = 0; i < 3; ++i) {
+    Vec2 a = uv[i], b = uv[(i + 1) % 3];
+    if (b.x < a.x || (b.x == a.x && b.y < a.y)) std::swap(a, b);
+    // Edge parameters of the crossings of both directions, merged.
+    int n = 0;
+    for (bool axis_v : {false, true}) {
+      double ca = axis_v ? a.y : a.x, cb = axis_v ? b.y : b.x;
+      int within = KnotsWithin(axis_v ? s.vknots : s.uknots, std::min(ca, cb), std::max(ca, cb),
+                               cut + 1 + n);
+      for (int k = 0; k < within; ++k) cut[1 + n + k] = (cut[1 + n + k] - ca) / (cb - ca);
+      n += within;
+    }
+    if (n == 0) continue;
+    std::sort(cut + 1, cut + 1 + n);
+    cut[0] = 0, cut[n + 1] = 1;
+    int count = Intervals(cut, n + 1, kEdgePieces, kEdgeSteps, interval);
+    for (int k = 0; k < count; ++k) {
+      double at = 0.5 * (interval[2 * k] + interval[2 * k + 1]);
+      sample((1 - at) * a + at * b);
+    }
+  }
+  for (bool axis_v : {false, true}) {
+    auto coord = [&](Vec2 q) { return axis_v ? q.y : q.x; };
+    double lo = std::min({coord(uv[0]), coord(uv[1]), coord(uv[2])});
+    double hi = std::max({coord(uv[0]), coord(uv[1]), coord(uv[2])});
+    int n = KnotsWithin(axis_v ? s.vknots : s.uknots, lo, hi, cut + 1);
+    if (n == 0) continue;
+    cut[0] = lo, cut[n + 1] = hi;
+    int count = Intervals(cut, n + 1, kStripPieces, kStripSteps, interval);
+    for (int k = 0; k < count; ++k) {
+      Vec2 above[4], strip[5];
+      int m = ClipPolygon(uv, 3, axis_v, -1, -interval[2 * k], above);
+      m = ClipPolygon(above, m, axis_v, 1, interval[2 * k + 1], strip);
+      if (m == 0) continue;
+      Vec2 sum;
+      for (int j = 0; j < m; ++j) sum = sum + strip[j];
+      sample((1.0 / m) * sum);
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 namespace {
 
 // MeasureTriangle's work. With `may_stop` it returns false as soon as the centroid height alone
 // puts the violation at or above `limit` (the fitted peak can only raise the deviation); then
-// m->violation holds that lower bound and nothing else is set.
+// m->violation holds that lower bound and nothing else is set. It also returns false, with *m
+// complete but for the knot-line samples, when the other samples put it at or above `limit`.
 bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& c, bool may_stop,
              double limit, TriangleMeasure* out) {
   TriangleMeasure& m = *out;
@@ -104,6 +224,7 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
     mid[i] = s.Point(mid_uv.x, mid_uv.y);
   }
   double dev = 0;
+  bool stopped = false;  // skipped the knot samples, known to violate the limit
   m.worst_uv = cen_uv;
   if (flat) {
     // Heights of the surface over the triangle's plane: at the centroid, and the peak of the
@@ -114,6 +235,17 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
     m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
     double hc = std::fabs(Dot(nh, cen - p[0]));
     if (hc > dev) dev = hc, m.worst_uv = cen_uv;
+    // Samples between knot lines, only where they may change the outcome: not for a triangle
+    // these samples put over the limit already (it is split anyway, or a probe rejects it; the
+    // probe then gets false below), nor one too small to split.
+    double gate = c.max_deviation * (may_stop ? std::min(limit, 1.0) : 1.0);
+    if (dev < gate && !(c.min_length > 0 && m.max_length < 2 * c.min_length)) {
+      Vec2 knot_uv;
+      double hk = KnotPeak(s, uv, p[0], nh, &knot_uv);
+      if (hk > dev) dev = hk, m.worst_uv = knot_uv;
+    } else if (may_stop && dev >= gate && dev < c.max_deviation) {
+      stopped = true;
+    }
     if (c.rd_tolerance > 0) {
       double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
       m.rd = split / (0.5 * area2) - 1.0;
@@ -136,7 +268,7 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
   if (c.max_length > 0) v = std::max(v, m.max_length / c.max_length);
   if (c.min_length > 0 && m.max_length < 2 * c.min_length) v = std::min(v, 1.0);
   m.violation = v;
-  return true;
+  return !stopped;
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 #pragma once
 // How well one triangle stands for its surface patch, from surface evaluations only:
 // the estimated deviation (largest surface-triangle distance), the representation deficit a
-// split would remove, its longest edge, and whether it is valid (no fold).
+// split would remove, its longest edge, and whether it is valid (no fold). On a B-spline the
+// deviation also looks between the knot lines the triangle crosses: one quadratic through the
+// edge midpoints cannot follow several polynomial pieces.
 
 #include "geom.h"
 #include "surface.h"
@@ -33,10 +35,11 @@ TriangleMeasure MeasureTriangle(Surface& surface, const Vec2 uv[3], const Vec3 x
                                 const FaceCriteria& criteria);
 
 /// MeasureTriangle for a caller that only wants triangles whose violation stays below `limit`:
-/// false when the centroid sample alone shows that it does not (the fitted peak can only raise
-/// the deviation), with m->violation a lower bound >= limit and nothing else set; true with *m
-/// as MeasureTriangle gives it (whose violation may still reach the limit). Skips the
-/// edge-midpoint samples of a triangle already over the limit.
+/// false when part of the samples shows that it does not (more samples can only raise the
+/// deviation), with m->violation a lower bound >= limit; true with *m as MeasureTriangle gives
+/// it (whose violation may still reach the limit). Skips the edge-midpoint samples of a
+/// triangle whose centroid is over the limit already (then nothing else is set), and the
+/// knot-line samples of one whose other samples are.
 bool MeasureTriangleBelow(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
                           const FaceCriteria& criteria, double limit, TriangleMeasure* m);
 

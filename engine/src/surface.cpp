@@ -84,6 +84,7 @@ class CachedSurface final : public Surface {
  public:
   explicit CachedSurface(std::unique_ptr<Surface> inner) : inner_(std::move(inner)) {
     umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
+    uknots = inner_->uknots, vknots = inner_->vknots;
     Resize(kMinBits);
   }
   Vec3 Point(double u, double v) override {
@@ -151,8 +152,10 @@ class OcctSurface final : public Surface {
     }
     if (adaptor_.GetType() != GeomAbs_BSplineSurface) return;
     Handle(Geom_BSplineSurface) bspline = adaptor_.BSpline();
-    for (int i = 1; i <= bspline->NbUKnots(); ++i) uknots_.push_back(bspline->UKnot(i));
-    for (int i = 1; i <= bspline->NbVKnots(); ++i) vknots_.push_back(bspline->VKnot(i));
+    for (int i = 1; i <= bspline->NbUKnots(); ++i) uknots.at.push_back(bspline->UKnot(i));
+    for (int i = 1; i <= bspline->NbVKnots(); ++i) vknots.at.push_back(bspline->VKnot(i));
+    if (bspline->IsUPeriodic()) uknots.period = uknots.at.back() - uknots.at.front();
+    if (bspline->IsVPeriodic()) vknots.period = vknots.at.back() - vknots.at.front();
     spans_.resize(kSpans);
     for (Span& span : spans_) span.adaptor.Load(surface);
   }
@@ -212,8 +215,8 @@ class OcctSurface final : public Surface {
       *lo = i > 0 ? k[i - 1] : -HUGE_VAL;
       *hi = i < k.size() ? k[i] : HUGE_VAL;
     };
-    interval(uknots_, u, &oldest->u0, &oldest->u1);
-    interval(vknots_, v, &oldest->v0, &oldest->v1);
+    interval(uknots.at, u, &oldest->u0, &oldest->u1);
+    interval(vknots.at, v, &oldest->v0, &oldest->v1);
     oldest->last_use = clock_;
     return oldest->adaptor;
   }
@@ -222,8 +225,7 @@ class OcctSurface final : public Surface {
   bool is_sphere_ = false;
   std::array<gp_XYZ, 4> sphere_;  // x, y and z directions and centre of a sphere
   double radius_ = 0;
-  std::vector<double> uknots_, vknots_;  // distinct knots of a B-spline
-  std::vector<Span> spans_;              // empty unless B-spline
+  std::vector<Span> spans_;  // empty unless B-spline
   uint64_t clock_ = 0;
 };
 

@@ -8,6 +8,7 @@
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <memory>
+#include <vector>
 
 #include "geom.h"
 
@@ -24,6 +25,14 @@ class Surface {
   virtual Vec3 Normal(double u, double v);
   /// Parameter bounds of the face (used to keep probes inside and to pick difference steps).
   double umin = 0, umax = 1, vmin = 0, vmax = 1;
+  /// Knot lines u = const / v = const of a B-spline, where its polynomial pieces meet (its
+  /// shape may turn there, unseen by samples on either side): the distinct knots ascending,
+  /// repeated every `period` when that is > 0. Empty for other surfaces.
+  struct KnotLines {
+    std::vector<double> at;
+    double period = 0;
+  };
+  KnotLines uknots, vknots;
 };
 
 /// A parametric curve C(t) in world coordinates.
