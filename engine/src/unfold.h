@@ -3,9 +3,10 @@
 // scaled (u,v) and is blind to where the surface bends: across a sharp bend, or on a long strip
 // whose far parts face other ways, a triangle can reach over so much of the surface that it folds
 // in 3D (its normal against the surface normals at its corners). Refinement cannot undo such a
-// fold by splitting inside the triangle, as a corner far across the bend keeps its fan, so the
-// first triangulation is unfolded before it: edge flips, then edge bisections where flips alone
-// are stuck.
+// fold by splitting inside the triangle, as a corner far across the bend keeps its fan. So a face
+// that refinement leaves short of its criteria is refined again from its unfolded first
+// triangulation (edge flips, then edge bisections where flips alone are stuck), and the better
+// of the two results is kept (face_mesher.cpp).
 
 #include "operations.h"
 #include "surface.h"
