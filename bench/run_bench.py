@@ -393,7 +393,7 @@ def report(a, models, infos, summaries, records, meta):
                  "less time than the measurements did).")
     L.append(f"- Per-run timeout {a.timeout:g} s; meshes over {a.score_cap:,} triangles are not scored (scoring B-spline "
              "faces runs at a few thousand triangles per second) and end their ladder; ladders also stop once a mesh reaches 1e-4.")
-    L.append("- Scorer: `/work/shared/yardstick/meshbench eval` (max deviation over the bbox diagonal, sampled at centroids, "
+    L.append("- Scorer: `meshbench eval` from /work/shared/yardstick, built by `scripts/yardstick.sh` (max deviation over the bbox diagonal, sampled at centroids, "
              "edge midpoints and an interior lattice of every triangle).\n")
     L.append("Figures are interpolated log-log along each mesher's Pareto front of (triangles, deviation) at a max "
              "deviation of 1e-3 and 1e-4 of the bbox diagonal. `—` = not reached by the ladder. Ratios < 1 mean rdmesh "
