@@ -598,9 +598,22 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   std::vector<std::array<Vec3, 2>> saved_xyz;
   std::vector<Vec2> saved_uv;
   for (int x : movers) saved_uv.push_back(m_.uv[x]), saved_xyz.push_back({m_.xyz[x], m_.normal[x]});
-  for (int x : movers) {
-    if (!m_.fixed[x]) SmoothNode(x);
+  // A region triangle is final once no later mover is its corner: one that still violates then
+  // dooms the attempt, so it stops there (the moves are undone below either way).
+  std::vector<int> last(region.size(), -1);
+  for (size_t j = 0; j < region.size(); ++j)
+    for (int k = 0; k < static_cast<int>(movers.size()); ++k)
+      if (!m_.fixed[movers[k]] && m_.CornerOf(region[j], movers[k]) >= 0) last[j] = k;
+  auto doomed = [&](int k) {
+    for (size_t j = 0; j < region.size(); ++j)
+      if (last[j] == k && measure_[region[j]].violation > 1.0) return true;
+    return false;
+  };
+  bool failed = doomed(-1);
+  for (int k = 0; k < static_cast<int>(movers.size()) && !failed; ++k) {
+    if (!m_.fixed[movers[k]]) SmoothNode(movers[k]);
     if (MaxViolation(region) <= 1.0) return true;
+    failed = doomed(k);
   }
   for (int k = static_cast<int>(movers.size()) - 1; k >= 0; --k) {
     int x = movers[k];
