@@ -66,17 +66,16 @@ class Refiner {
     return cand;
   }
   // Evaluate(tris) for a candidate that is wanted only when the fold guard holds (AgreementOk
-  // against old_agree) and wanted(max_violation): false, with *cand partial, as soon as either
-  // fails. wanted must stay false once it is as the violation grows.
-  template <class Wanted>
-  bool EvaluateWanted(const std::vector<Tri>& tris, double old_agree, Wanted wanted,
-                      Candidate* cand) {
+  // against old_agree) and its max_violation stays below `limit`: false, with *cand partial, as
+  // soon as either fails (a triangle's centroid alone may show that it reaches the limit).
+  bool EvaluateBelow(const std::vector<Tri>& tris, double old_agree, double limit,
+                     Candidate* cand) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
     double agreement[64];
     if (tris.size() > 64) {
       *cand = Evaluate(tris);
-      return AgreementOk(cand->min_agreement, old_agree) && wanted(cand->max_violation);
+      return AgreementOk(cand->min_agreement, old_agree) && cand->max_violation < limit;
     }
     for (size_t k = 0; k < tris.size(); ++k) {
       Corners(tris[k], uv, p, n);
@@ -84,30 +83,37 @@ class Refiner {
       cand->min_agreement = std::min(cand->min_agreement, agreement[k]);
     }
     if (!AgreementOk(cand->min_agreement, old_agree)) return false;
-    cand->measures.reserve(tris.size());
+    cand->measures.resize(tris.size());
     for (size_t k = 0; k < tris.size(); ++k) {
       m_.MeasureCorners(tris[k], uv, p);
-      cand->measures.push_back(MeasureTriangle(s_, uv, p, c_));
-      PenaliseFold(&cand->measures.back(), agreement[k]);
-      cand->max_violation = std::max(cand->max_violation, cand->measures.back().violation);
-      if (!wanted(cand->max_violation)) return false;
+      TriangleMeasure& m = cand->measures[k];
+      if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m)) return false;
+      PenaliseFold(&m, agreement[k]);
+      cand->max_violation = std::max(cand->max_violation, m.violation);
+      if (!(cand->max_violation < limit)) return false;
     }
     return true;
   }
   // Evaluate(tris).max_violation for a smoothing probe of node v, HUGE_VAL when AgreementOk
   // fails. Once the probe shows it cannot win (the running maximum reaches `limit`, or the fold
-  // guard fails) it returns a value >= limit. v's surface normal is evaluated only when the fold
-  // guard is first needed. Triangles are measured in `order` (worst first at the last full
-  // measurement, which reorders it); a full measurement leaves in `measures` what
-  // Evaluate(tris).measures would hold.
+  // guard fails) it returns a value >= limit, with the triangle that showed it in *stopper. v's
+  // surface normal is evaluated only when the fold guard is first needed. Triangles are measured
+  // from tris[first] (when first >= 0) on, then in `order` (worst first at the last full
+  // measurement, which reorders it); the order changes only how soon a losing probe stops. A
+  // full measurement leaves in `measures` what Evaluate(tris).measures would hold.
   double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
-                       std::vector<int>* order, std::vector<TriangleMeasure>* measures) {
+                       int first, int* stopper, std::vector<int>* order,
+                       std::vector<TriangleMeasure>* measures) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
     double min_agreement = 1, worst = 0;
     bool normal_ready = false;
     measures->resize(tris.size());
-    for (int k : *order) {
+    const int count = static_cast<int>(order->size());
+    for (int j = first >= 0 ? -1 : 0; j < count; ++j) {
+      const int k = j < 0 ? first : (*order)[j];
+      if (j >= 0 && k == first) continue;
+      *stopper = k;
       m_.MeasureCorners(tris[k], uv, p);
       TriangleMeasure& m = (*measures)[k];
       if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m)) return m.violation;
@@ -558,11 +564,10 @@ bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
       oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
     if (!oriented) continue;
     // Wanted only within the slack and better than the best so far.
-    auto wanted = [&](double violation) {
-      return violation <= slack && (best->w < 0 || violation < best->cand.max_violation);
-    };
+    double limit = std::nextafter(slack, HUGE_VAL);
+    if (best->w >= 0) limit = std::min(limit, best->cand.max_violation);
     Candidate cand;
-    if (EvaluateWanted(tris, old_agree, wanted, &cand)) {
+    if (EvaluateBelow(tris, old_agree, limit, &cand)) {
       best->w = w, best->cand = std::move(cand), best->tris = std::move(tris);
       best->cavity = cavity;
     }
@@ -702,13 +707,27 @@ bool Refiner::SmoothNode(int v) {
   // that lost), so that probe's point, normal and measures are the result's.
   std::vector<TriangleMeasure> measures, best_measures;
   Vec3 best_xyz, best_normal;
+  // The triangle that stopped the last losing probe in each direction (+u, -u, +v, -v) from the
+  // last winning one: measured first, it most often stops the next probe that way too.
+  int hint[4] = {-1, -1, -1, -1};
+  Vec2 center = uv0;
   auto objective = [&](Vec2 q, double bound) {
     m_.uv[v] = q;  // the (u,v) test first: S and its normal only for oriented probes
     for (const Tri& nt : tris)
       if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
     m_.xyz[v] = s_.Point(q.x, q.y);  // RingViolation evaluates the normal when it needs it
-    double worst = RingViolation(tris, v, old_agree, -bound, &order, &measures);
-    if (worst < -bound) best_xyz = m_.xyz[v], best_normal = m_.normal[v], best_measures = measures;
+    const Vec2 d = q - center;
+    const int dir =
+        std::fabs(d.x * su_) >= std::fabs(d.y * sv_) ? (d.x > 0 ? 0 : 1) : (d.y > 0 ? 2 : 3);
+    int stopper = -1;
+    double worst =
+        RingViolation(tris, v, old_agree, -bound, hint[dir], &stopper, &order, &measures);
+    if (worst < -bound) {
+      best_xyz = m_.xyz[v], best_normal = m_.normal[v], best_measures = measures;
+      center = q;
+    } else {
+      hint[dir] = stopper;
+    }
     return -worst;
   };
   PatternSearchResult res = CrossPatternSearch(
