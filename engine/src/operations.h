@@ -56,6 +56,9 @@ struct WorkMesh {
   std::vector<int> Ring(int v) const;
   /// Nodes adjacent to node v.
   std::vector<int> Neighbours(int v) const;
+  /// Ring(v) into *ring and Neighbours(v) into *neighbours (same orders), from one walk, into
+  /// the caller's vectors (their capacity is reused).
+  void Fan(int v, std::vector<int>* ring, std::vector<int>* neighbours) const;
 };
 
 /// Builds the working mesh from domain nodes plus extra interior nodes and their triangulation.

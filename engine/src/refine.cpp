@@ -1,6 +1,7 @@
 #include "refine.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <queue>
 #include <tuple>
@@ -162,9 +163,14 @@ class Refiner {
     for (int t : tris) v = std::max(v, measure_[t].violation);
     return v;
   }
+  // Agreement(t) is kept in measure_[t].agreement: every measurement that lands in measure_
+  // comes with the fold guard of the same corners (PenaliseFold).
   double MinAgreement(const std::vector<int>& tris) const {
     double a = 1;
-    for (int t : tris) a = std::min(a, Agreement(t));
+    for (int t : tris) {
+      assert(measure_[t].agreement == Agreement(t));
+      a = std::min(a, measure_[t].agreement);
+    }
     return a;
   }
   // An optimisation step may not fold a triangle, nor push agreement below the guard where the
@@ -242,6 +248,7 @@ class Refiner {
   bool sliver_recursion_ = false;
   bool rescue_ = false;  // splits may flip folded children's outer edges (RescueSplit)
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
+  std::vector<int> fan_ring_, fan_nodes_, link_ring_, link_nodes_;  // BestCollapse's scratch
 };
 
 Status Refiner::RefineToCriteria(int64_t max_triangles) {
@@ -546,23 +553,27 @@ void Refiner::Legalize(int node) {
 bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
   best->w = -1;
   if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
-  std::vector<int> nv = m_.Neighbours(v);
-  std::vector<int> cavity = m_.Ring(v);
+  std::vector<int>&cavity = fan_ring_, &nv = fan_nodes_, &nw = link_nodes_;
+  m_.Fan(v, &cavity, &nv);
   if (nv.size() != cavity.size()) return false;  // not a closed fan
-  double old_agree = MinAgreement(cavity);
+  const double old_agree = MinAgreement(cavity);
   for (int w : nv) {
+    // CollapseTris(m_, v, w, ...) from the fan at hand; first the cheap (u,v) test.
+    std::vector<Tri> tris;
+    bool oriented = true;
+    for (int t : cavity) {
+      if (m_.CornerOf(t, w) >= 0) continue;
+      Tri nt = m_.tri[t];
+      nt[m_.CornerOf(t, v)] = w;
+      oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
+      tris.push_back(nt);
+    }
+    if (!oriented) continue;
     // Link condition: v and w share exactly the two apexes of the triangles on edge v-w.
-    std::vector<int> nw = m_.Neighbours(w);
+    m_.Fan(w, &link_ring_, &nw);
     int common = 0;
     for (int x : nv) common += std::find(nw.begin(), nw.end(), x) != nw.end();
     if (common != 2) continue;
-    std::vector<int> cav;
-    std::vector<Tri> tris;
-    CollapseTris(m_, v, w, &cav, &tris);
-    bool oriented = true;
-    for (const Tri& nt : tris)
-      oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
-    if (!oriented) continue;
     // Wanted only within the slack and better than the best so far.
     double limit = std::nextafter(slack, HUGE_VAL);
     if (best->w >= 0) limit = std::min(limit, best->cand.max_violation);
@@ -683,8 +694,8 @@ int Refiner::FlipPass() {
 
 bool Refiner::SmoothNode(int v) {
   if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
-  std::vector<int> ring = m_.Ring(v);
-  std::vector<int> nv = m_.Neighbours(v);
+  std::vector<int> ring, nv;
+  m_.Fan(v, &ring, &nv);
   if (nv.size() != ring.size()) return false;
   std::vector<Tri> tris;
   for (int t : ring) tris.push_back(m_.tri[t]);
