@@ -272,16 +272,32 @@ bool FlipOuterEdgeTris(const WorkMesh& m, const std::vector<int>& cavity, const 
   return false;
 }
 
-void CollapseTris(const WorkMesh& m, int v, int w, std::vector<int>* cavity,
+void CollapseTris(const WorkMesh& m, int v, int w, const std::vector<int>& ring,
                   std::vector<Tri>* tris) {
-  *cavity = m.Ring(v);
   tris->clear();
-  for (int t : *cavity) {
+  for (int t : ring) {
     if (m.CornerOf(t, w) >= 0) continue;
     Tri x = m.tri[t];
     x[m.CornerOf(t, v)] = w;
     tris->push_back(x);
   }
+}
+
+std::vector<int> RingsOf(const WorkMesh& m, const std::vector<int>& nodes) {
+  std::vector<int> out;
+  for (int x : nodes)
+    for (int t : m.Ring(x))
+      if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
+  return out;
+}
+
+std::vector<int> LastMoves(const WorkMesh& m, const std::vector<int>& movers,
+                           const std::vector<int>& tris) {
+  std::vector<int> last(tris.size(), -1);
+  for (size_t j = 0; j < tris.size(); ++j)
+    for (int k = 0; k < static_cast<int>(movers.size()); ++k)
+      if (!m.fixed[movers[k]] && m.CornerOf(tris[j], movers[k]) >= 0) last[j] = k;
+  return last;
 }
 
 }  // namespace rdmesh

@@ -73,11 +73,8 @@ class Refiner {
                      Candidate* cand) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
-    double agreement[64];
-    if (tris.size() > 64) {
-      *cand = Evaluate(tris);
-      return AgreementOk(cand->min_agreement, old_agree) && cand->max_violation < limit;
-    }
+    std::vector<double>& agreement = agreement_;
+    agreement.resize(tris.size());
     for (size_t k = 0; k < tris.size(); ++k) {
       Corners(tris[k], uv, p, n);
       agreement[k] = TriangleAgreement(uv, p, n);
@@ -249,6 +246,7 @@ class Refiner {
   bool rescue_ = false;  // splits may flip folded children's outer edges (RescueSplit)
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
   std::vector<int> fan_ring_, fan_nodes_, link_ring_, link_nodes_;  // BestCollapse's scratch
+  std::vector<double> agreement_;                                   // EvaluateBelow's
 };
 
 Status Refiner::RefineToCriteria(int64_t max_triangles) {
@@ -558,16 +556,11 @@ bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
   if (nv.size() != cavity.size()) return false;  // not a closed fan
   const double old_agree = MinAgreement(cavity);
   for (int w : nv) {
-    // CollapseTris(m_, v, w, ...) from the fan at hand; first the cheap (u,v) test.
     std::vector<Tri> tris;
-    bool oriented = true;
-    for (int t : cavity) {
-      if (m_.CornerOf(t, w) >= 0) continue;
-      Tri nt = m_.tri[t];
-      nt[m_.CornerOf(t, v)] = w;
+    CollapseTris(m_, v, w, cavity, &tris);
+    bool oriented = true;  // the cheap (u,v) test first
+    for (const Tri& nt : tris)
       oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
-      tris.push_back(nt);
-    }
     if (!oriented) continue;
     // Link condition: v and w share exactly the two apexes of the triangles on edge v-w.
     m_.Fan(w, &link_ring_, &nw);
@@ -605,10 +598,7 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   for (int x : m_.Neighbours(w))
     if (!m_.fixed[x]) movers.push_back(x);
   if (!m_.fixed[w]) movers.push_back(w);
-  std::vector<int> region;
-  for (int x : movers)
-    for (int t : m_.Ring(x))
-      if (std::find(region.begin(), region.end(), t) == region.end()) region.push_back(t);
+  std::vector<int> region = RingsOf(m_, movers);
   std::vector<TriangleMeasure> region_measures;
   for (int t : region) region_measures.push_back(measure_[t]);
   std::vector<std::array<Vec3, 2>> saved_xyz;
@@ -616,10 +606,7 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   for (int x : movers) saved_uv.push_back(m_.uv[x]), saved_xyz.push_back({m_.xyz[x], m_.normal[x]});
   // A region triangle is final once no later mover is its corner: one that still violates then
   // dooms the attempt, so it stops there (the moves are undone below either way).
-  std::vector<int> last(region.size(), -1);
-  for (size_t j = 0; j < region.size(); ++j)
-    for (int k = 0; k < static_cast<int>(movers.size()); ++k)
-      if (!m_.fixed[movers[k]] && m_.CornerOf(region[j], movers[k]) >= 0) last[j] = k;
+  std::vector<int> last = LastMoves(m_, movers, region);
   auto doomed = [&](int k) {
     for (size_t j = 0; j < region.size(); ++j)
       if (last[j] == k && measure_[region[j]].violation > 1.0) return true;
