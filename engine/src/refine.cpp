@@ -60,7 +60,7 @@ class Refiner {
       cand.min_agreement = std::min(cand.min_agreement, agreement);
       m_.MeasureCorners(t, uv, p);
       cand.measures.push_back(MeasureTriangle(s_, uv, p, c_));
-      PenaliseFold(&cand.measures.back(), agreement);
+      PenaliseFold(t, agreement, &cand.measures.back());
       cand.max_violation = std::max(cand.max_violation, cand.measures.back().violation);
     }
     return cand;
@@ -88,7 +88,7 @@ class Refiner {
     for (size_t k = 0; k < tris.size(); ++k) {
       m_.MeasureCorners(tris[k], uv, p);
       cand->measures.push_back(MeasureTriangle(s_, uv, p, c_));
-      PenaliseFold(&cand->measures.back(), agreement[k]);
+      PenaliseFold(tris[k], agreement[k], &cand->measures.back());
       cand->max_violation = std::max(cand->max_violation, cand->measures.back().violation);
       if (!wanted(cand->max_violation)) return false;
     }
@@ -116,18 +116,30 @@ class Refiner {
       if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
       Corners(tris[k], uv, p, n);
       double agreement = TriangleAgreement(uv, p, n);
-      PenaliseFold(&m, agreement);  // a no-op on violation once the guard below holds
+      PenaliseFold(tris[k], agreement, &m);
       min_agreement = std::min(min_agreement, agreement);
       if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
+      worst = std::max(worst, m.violation);  // a standing triangle's edges may raise it
+      if (worst >= limit) return worst;
     }
     std::stable_sort(order->begin(), order->end(), [&](int a, int b) {
       return (*measures)[a].violation > (*measures)[b].violation;
     });
     return worst;
   }
-  // A folded triangle (its normal against the surface's) must be refined whatever it deviates.
-  static void PenaliseFold(TriangleMeasure* m, double agreement) {
+  // A folded triangle (its normal against the surface's) must be refined whatever it deviates;
+  // one that stands against the surface is measured along its edges too (MeasureStanding).
+  void PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) const {
     m->agreement = agreement;
+    // At a pole the corner normal is a stand-in (FoldCorners): standing is not known there.
+    bool pole = m_.pole_axis[t[0]] + m_.pole_axis[t[1]] + m_.pole_axis[t[2]] > -3;
+    if (agreement > kInvalid && agreement < c_.min_normal_cos && !pole) {
+      Vec2 uv[3], fold_uv[3];
+      Vec3 p[3], fold_p[3], n[3];
+      m_.MeasureCorners(t, uv, p);
+      m_.FoldCorners(t, fold_uv, fold_p, n);
+      MeasureStanding(s_, uv, p, n, c_, m);
+    }
     if (agreement <= 0) m->violation = std::max(m->violation, kFoldViolation);
   }
   // Splits may not fold a child, except that a folded parent may leave children no worse.
@@ -249,7 +261,7 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
     Vec3 p[3];
     m_.MeasureCorners(t, uv, p);
     measure_[t] = MeasureTriangle(s_, uv, p, c_);
-    PenaliseFold(&measure_[t], Agreement(t));
+    PenaliseFold(m_.tri[t], Agreement(t), &measure_[t]);
     if (measure_[t].violation > 1) Push(t);
   }
   int64_t ops = 0;
