@@ -306,6 +306,25 @@ double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3
   return worst;
 }
 
+void MeasureStanding(Surface& s, const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3],
+                     const FaceCriteria& c, TriangleMeasure* m) {
+  if (!(c.max_deviation > 0) || (c.min_length > 0 && m->max_length < 2 * c.min_length)) return;
+  for (int i = 0; i < 3; ++i) {
+    const int a = (i + 1) % 3, b = (i + 2) % 3;
+    double length = Dist(p[a], p[b]);
+    if (!(length > 0)) continue;
+    Vec3 d = (1.0 / length) * (p[b] - p[a]);
+    Vec3 normal = normals[a] + normals[b];
+    normal = normal - Dot(normal, d) * d;  // across the edge
+    double norm = Norm(normal);
+    if (!(norm > 1e-12)) continue;
+    Vec2 q = 0.5 * (uv[a] + uv[b]);
+    double h = std::fabs(Dot(normal, s.Point(q.x, q.y) - p[a])) / norm;
+    if (h > m->deviation) m->deviation = h, m->worst_uv = q;
+  }
+  m->violation = std::max(m->violation, m->deviation / c.max_deviation);
+}
+
 double SplitAreaRatio(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec2 q) {
   Vec3 x = s.Point(q.x, q.y);
   double a = Area(p[0], p[1], p[2]);

@@ -52,53 +52,43 @@ class Refiner {
   }
   Candidate Evaluate(const std::vector<Tri>& tris) {
     Candidate cand;
-    cand.measures.reserve(tris.size());
-    for (const Tri& t : tris) {
-      Vec2 uv[3];
-      Vec3 p[3], n[3];
-      Corners(t, uv, p, n);
-      double agreement = TriangleAgreement(uv, p, n);
-      cand.min_agreement = std::min(cand.min_agreement, agreement);
-      m_.MeasureCorners(t, uv, p);
-      cand.measures.push_back(MeasureTriangle(s_, uv, p, c_));
-      PenaliseFold(&cand.measures.back(), agreement);
-      cand.max_violation = std::max(cand.max_violation, cand.measures.back().violation);
-    }
+    EvaluateBelow(tris, false, 0, 0, &cand);
     return cand;
   }
-  // Evaluate(tris) for a candidate that is wanted only when the fold guard holds (AgreementOk
-  // against old_agree) and its max_violation stays below `limit`: false, with *cand partial, as
-  // soon as either fails (a triangle's centroid alone may show that it reaches the limit).
-  bool EvaluateBelow(const std::vector<Tri>& tris, double old_agree, double limit,
+  // The measures of `tris`, their largest violation and smallest agreement into *cand. With
+  // `stop`, for a candidate wanted only when the fold guard holds (AgreementOk against old_agree)
+  // and its max_violation stays below `limit`: false, with *cand partial, once either fails.
+  bool EvaluateBelow(const std::vector<Tri>& tris, bool stop, double old_agree, double limit,
                      Candidate* cand) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
-    std::vector<double>& agreement = agreement_;
+    std::vector<double>& agreement = agreement_;  // scratch
     agreement.resize(tris.size());
     for (size_t k = 0; k < tris.size(); ++k) {
       Corners(tris[k], uv, p, n);
       agreement[k] = TriangleAgreement(uv, p, n);
       cand->min_agreement = std::min(cand->min_agreement, agreement[k]);
     }
-    if (!AgreementOk(cand->min_agreement, old_agree)) return false;
+    if (stop && !AgreementOk(cand->min_agreement, old_agree)) return false;
     cand->measures.resize(tris.size());
     for (size_t k = 0; k < tris.size(); ++k) {
       m_.MeasureCorners(tris[k], uv, p);
       TriangleMeasure& m = cand->measures[k];
-      if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m)) return false;
-      PenaliseFold(&m, agreement[k]);
+      if (!stop)
+        m = MeasureTriangle(s_, uv, p, c_);
+      else if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m))
+        return false;
+      PenaliseFold(tris[k], agreement[k], &m);
       cand->max_violation = std::max(cand->max_violation, m.violation);
-      if (!(cand->max_violation < limit)) return false;
+      if (stop && !(cand->max_violation < limit)) return false;
     }
     return true;
   }
-  // Evaluate(tris).max_violation for a smoothing probe of node v, HUGE_VAL when AgreementOk
-  // fails. Once the probe shows it cannot win (the running maximum reaches `limit`, or the fold
-  // guard fails) it returns a value >= limit, with the triangle that showed it in *stopper. v's
-  // surface normal is evaluated only when the fold guard is first needed. Triangles are measured
-  // from tris[first] (when first >= 0) on, then in `order` (worst first at the last full
-  // measurement, which reorders it); the order changes only how soon a losing probe stops. A
-  // full measurement leaves in `measures` what Evaluate(tris).measures would hold.
+  // Evaluate(tris).max_violation for a smoothing probe of v; once it cannot win (the maximum
+  // reaches `limit`, or AgreementOk fails) a value >= limit, with the triangle that showed it in
+  // *stopper. v's normal is evaluated when first needed. Measures tris[first] (if >= 0), then
+  // `order` (worst first at the last full measurement, which re-sorts it): the order only changes
+  // how soon a loser stops. A full one leaves in `measures` what Evaluate(tris).measures holds.
   double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
                        int first, int* stopper, std::vector<int>* order,
                        std::vector<TriangleMeasure>* measures) {
@@ -120,18 +110,30 @@ class Refiner {
       if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
       Corners(tris[k], uv, p, n);
       double agreement = TriangleAgreement(uv, p, n);
-      PenaliseFold(&m, agreement);  // a no-op on violation once the guard below holds
+      PenaliseFold(tris[k], agreement, &m);
       min_agreement = std::min(min_agreement, agreement);
       if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
+      worst = std::max(worst, m.violation);  // a standing triangle's edges may raise it
+      if (worst >= limit) return worst;
     }
     std::stable_sort(order->begin(), order->end(), [&](int a, int b) {
       return (*measures)[a].violation > (*measures)[b].violation;
     });
     return worst;
   }
-  // A folded triangle (its normal against the surface's) must be refined whatever it deviates.
-  static void PenaliseFold(TriangleMeasure* m, double agreement) {
+  // A folded triangle (its normal against the surface's) must be refined whatever it deviates;
+  // one that stands against the surface is measured along its edges too (MeasureStanding).
+  void PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) const {
     m->agreement = agreement;
+    // At a pole the corner normal is a stand-in (FoldCorners): standing is not known there.
+    bool pole = m_.pole_axis[t[0]] + m_.pole_axis[t[1]] + m_.pole_axis[t[2]] > -3;
+    if (agreement > kInvalid && agreement < c_.min_normal_cos && !pole) {
+      Vec2 uv[3], fold_uv[3];
+      Vec3 p[3], fold_p[3], n[3];
+      m_.MeasureCorners(t, uv, p);
+      m_.FoldCorners(t, fold_uv, fold_p, n);
+      MeasureStanding(s_, uv, p, n, c_, m);
+    }
     if (agreement <= 0) m->violation = std::max(m->violation, kFoldViolation);
   }
   // Splits may not fold a child, except that a folded parent may leave children no worse.
@@ -260,7 +262,7 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
     Vec3 p[3];
     m_.MeasureCorners(t, uv, p);
     measure_[t] = MeasureTriangle(s_, uv, p, c_);
-    PenaliseFold(&measure_[t], Agreement(t));
+    PenaliseFold(m_.tri[t], Agreement(t), &measure_[t]);
     if (measure_[t].violation > 1) Push(t);
   }
   int64_t ops = 0;
@@ -571,7 +573,7 @@ bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
     double limit = std::nextafter(slack, HUGE_VAL);
     if (best->w >= 0) limit = std::min(limit, best->cand.max_violation);
     Candidate cand;
-    if (EvaluateBelow(tris, old_agree, limit, &cand)) {
+    if (EvaluateBelow(tris, true, old_agree, limit, &cand)) {
       best->w = w, best->cand = std::move(cand), best->tris = std::move(tris);
       best->cavity = cavity;
     }

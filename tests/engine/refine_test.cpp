@@ -104,6 +104,59 @@ TEST(RefineTest, SplitsThatFoldEveryChildAreRescuedByFlips) {
   EXPECT_LE(f.OutputTriangles(), 24);
 }
 
+TEST(RefineTest, StandingFinIsRefinedAway) {
+  // A quarter of a cylinder r = 1 whose first triangulation has a fin, as refinement left one on
+  // nist_mbe_pmi_11's B-spline faces: a chord a-b across the curved direction, with a thin
+  // triangle to c on one side and to d on the other. The fin stands against the surface (its
+  // plane holds the arc), so the surface stays close to its plane while the chord lies 0.28
+  // inside the cylinder: the estimate must see that and refine the fin away.
+  const double delta = 1e-3, u1 = M_PI / 2;
+  AnalyticFace f;
+  f.surface = MakeCylinderSurface(1.0);
+  Surface& s = *f.surface;
+  s.umin = 0, s.umax = u1, s.vmin = 0, s.vmax = 1;
+  EdgeGridCriteria edge;
+  edge.max_sagitta = delta;
+  std::vector<Vec2> uv;
+  std::vector<std::array<int, 2>> segments;
+  const Vec2 corners[4] = {{0, 0}, {u1, 0}, {u1, 1}, {0, 1}};
+  for (int side = 0; side < 4; ++side) {
+    testing::ParamLine line(s, corners[side], corners[(side + 1) % 4]);
+    std::vector<double> ts = DiscretizeCurve(line, 0.0, 1.0, edge);
+    for (size_t k = 0; k + 1 < ts.size(); ++k) {
+      int n = static_cast<int>(uv.size());
+      uv.push_back((1 - ts[k]) * corners[side] + ts[k] * corners[(side + 1) % 4]);
+      segments.push_back({n, n + 1});
+    }
+  }
+  segments.back()[1] = 0;
+  const int a = static_cast<int>(uv.size()), b = a + 1;
+  uv.insert(uv.end(), {{0.05, 0.5}, {u1 - 0.05, 0.502}, {0.8, 0.51}, {0.8, 0.49}});
+  // The chord is a constraint of the triangulation only: refinement may flip or split it.
+  segments.push_back({a, b});
+  CdtResult cdt;
+  ASSERT_TRUE(ConstrainedTriangulation(uv, segments, &cdt).ok());
+  for (size_t t = 0; t < cdt.triangles.size(); ++t)
+    for (int i = 0; i < 3; ++i) {
+      int p = cdt.triangles[t][(i + 1) % 3], q = cdt.triangles[t][(i + 2) % 3];
+      if ((p == a && q == b) || (p == b && q == a)) cdt.constrained[t][i] = false;
+    }
+  for (int v = 0; v < static_cast<int>(uv.size()); ++v)
+    f.mesh.AddNode(uv[v], s.Point(uv[v].x, uv[v].y), s.Normal(uv[v].x, uv[v].y), v < a,
+                   v < a ? NodeRef{0, 0, 0} : NodeRef{});
+  InitWorkMesh(cdt.triangles, cdt.constrained, {}, &f.mesh);
+  FaceCriteria face;
+  face.max_deviation = delta;
+  RefineFace(&f.mesh, s, face, 1.0, 1.0, 200000, true, nullptr, &f.stats);
+  EXPECT_LE(f.stats.max_violation, 1.0);
+  double measured =
+      f.MeasuredDeviation([](Vec3 p) { return std::fabs(std::hypot(p.x, p.y) - 1.0); });
+  EXPECT_LE(measured, 1.05 * delta);
+  // The strip needs n segments along the arc and 2n triangles, as a cylinder does.
+  int n = static_cast<int>(std::ceil(u1 / 2 / std::acos(1 - delta)));
+  EXPECT_LE(f.OutputTriangles(), 2 * n + 4);
+}
+
 TEST(RefineTest, SphereNearTheoreticalMinimum) {
   // Unit sphere at 1e-3 of its bbox diagonal: the optimum is 2 * 2.418 / delta triangles.
   const double delta = 1e-3 * 2 * std::sqrt(3.0);
