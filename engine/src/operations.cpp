@@ -53,38 +53,61 @@ int WorkMesh::CornerOf(int t, int v) const {
   return -1;
 }
 
-std::vector<int> WorkMesh::Ring(int v) const {
-  std::vector<int> ring;
-  ring.reserve(8);
-  int start = node_tri[v];
-  if (start < 0 || !alive[start]) return ring;
+namespace {
+
+// WorkMesh::Ring's walk, into *ring (cleared first).
+void WalkRing(const WorkMesh& m, int v, std::vector<int>* ring) {
+  ring->clear();
+  int start = m.node_tri[v];
+  if (start < 0 || !m.alive[start]) return;
   // Walk one way (across the edge after v), then, if the fan is open, the other way.
   int t = start;
   do {
-    ring.push_back(t);
-    int k = CornerOf(t, v);
-    t = nbr[t][(k + 1) % 3];
-  } while (t >= 0 && t != start && ring.size() < 4096);
-  if (t == start) return ring;
+    ring->push_back(t);
+    int k = m.CornerOf(t, v);
+    t = m.nbr[t][(k + 1) % 3];
+  } while (t >= 0 && t != start && ring->size() < 4096);
+  if (t == start) return;
   t = start;
   while (true) {
-    int k = CornerOf(t, v);
-    t = nbr[t][(k + 2) % 3];
-    if (t < 0 || t == start || ring.size() >= 4096) break;
-    ring.push_back(t);
+    int k = m.CornerOf(t, v);
+    t = m.nbr[t][(k + 2) % 3];
+    if (t < 0 || t == start || ring->size() >= 4096) break;
+    ring->push_back(t);
   }
+}
+
+// The nodes of the triangles `ring` around v, but v, in their order of first appearance.
+void RingNodes(const WorkMesh& m, int v, const std::vector<int>& ring, std::vector<int>* out) {
+  out->clear();
+  for (int t : ring) {
+    int k = m.CornerOf(t, v);
+    for (int j : {m.tri[t][(k + 1) % 3], m.tri[t][(k + 2) % 3]})
+      if (std::find(out->begin(), out->end(), j) == out->end()) out->push_back(j);
+  }
+}
+
+}  // namespace
+
+std::vector<int> WorkMesh::Ring(int v) const {
+  std::vector<int> ring;
+  ring.reserve(8);
+  WalkRing(*this, v, &ring);
   return ring;
 }
 
 std::vector<int> WorkMesh::Neighbours(int v) const {
-  std::vector<int> out;
+  std::vector<int> ring, out;
+  ring.reserve(8);
   out.reserve(8);
-  for (int t : Ring(v)) {
-    int k = CornerOf(t, v);
-    for (int j : {tri[t][(k + 1) % 3], tri[t][(k + 2) % 3]})
-      if (std::find(out.begin(), out.end(), j) == out.end()) out.push_back(j);
-  }
+  WalkRing(*this, v, &ring);
+  RingNodes(*this, v, ring, &out);
   return out;
+}
+
+void WorkMesh::Fan(int v, std::vector<int>* ring, std::vector<int>* neighbours) const {
+  WalkRing(*this, v, ring);
+  RingNodes(*this, v, *ring, neighbours);
 }
 
 void InitWorkMesh(const std::vector<std::array<int, 3>>& triangles,
@@ -249,16 +272,32 @@ bool FlipOuterEdgeTris(const WorkMesh& m, const std::vector<int>& cavity, const 
   return false;
 }
 
-void CollapseTris(const WorkMesh& m, int v, int w, std::vector<int>* cavity,
+void CollapseTris(const WorkMesh& m, int v, int w, const std::vector<int>& ring,
                   std::vector<Tri>* tris) {
-  *cavity = m.Ring(v);
   tris->clear();
-  for (int t : *cavity) {
+  for (int t : ring) {
     if (m.CornerOf(t, w) >= 0) continue;
     Tri x = m.tri[t];
     x[m.CornerOf(t, v)] = w;
     tris->push_back(x);
   }
+}
+
+std::vector<int> RingsOf(const WorkMesh& m, const std::vector<int>& nodes) {
+  std::vector<int> out;
+  for (int x : nodes)
+    for (int t : m.Ring(x))
+      if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
+  return out;
+}
+
+std::vector<int> LastMoves(const WorkMesh& m, const std::vector<int>& movers,
+                           const std::vector<int>& tris) {
+  std::vector<int> last(tris.size(), -1);
+  for (size_t j = 0; j < tris.size(); ++j)
+    for (int k = 0; k < static_cast<int>(movers.size()); ++k)
+      if (!m.fixed[movers[k]] && m.CornerOf(tris[j], movers[k]) >= 0) last[j] = k;
+  return last;
 }
 
 }  // namespace rdmesh

@@ -56,6 +56,9 @@ struct WorkMesh {
   std::vector<int> Ring(int v) const;
   /// Nodes adjacent to node v.
   std::vector<int> Neighbours(int v) const;
+  /// Ring(v) into *ring and Neighbours(v) into *neighbours (same orders), from one walk, into
+  /// the caller's vectors (their capacity is reused).
+  void Fan(int v, std::vector<int>* ring, std::vector<int>* neighbours) const;
 };
 
 /// Builds the working mesh from domain nodes plus extra interior nodes and their triangulation.
@@ -88,9 +91,16 @@ bool FlipTris(const WorkMesh& mesh, int t, int i, std::vector<int>* cavity, std:
 bool FlipOuterEdgeTris(const WorkMesh& mesh, const std::vector<int>& cavity, const Tri& child,
                        int n, int* w, Tri out[2]);
 /// The triangles around v after collapsing v into its neighbour w (the two triangles on the
-/// edge v-w disappear).
-void CollapseTris(const WorkMesh& mesh, int v, int w, std::vector<int>* cavity,
+/// edge v-w disappear), from `ring` = Ring(v).
+void CollapseTris(const WorkMesh& mesh, int v, int w, const std::vector<int>& ring,
                   std::vector<Tri>* tris);
+/// The triangles around any of `nodes`, each once, in order of first appearance.
+std::vector<int> RingsOf(const WorkMesh& mesh, const std::vector<int>& nodes);
+/// For moving the nodes `movers` one after another (fixed ones stay put), per triangle of
+/// `tris`: the index in `movers` of the last move among its corners, -1 for none. After that
+/// move the triangle no longer changes.
+std::vector<int> LastMoves(const WorkMesh& mesh, const std::vector<int>& movers,
+                           const std::vector<int>& tris);
 
 /// Rebuilds the triangles around pole node p so that each fan triangle (one pole corner) gets a
 /// pole node of its own, under the middle of its ring edge. Adds the new pole nodes (returned in

@@ -1,6 +1,7 @@
 #include "refine.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <queue>
 #include <tuple>
@@ -51,63 +52,56 @@ class Refiner {
   }
   Candidate Evaluate(const std::vector<Tri>& tris) {
     Candidate cand;
-    cand.measures.reserve(tris.size());
-    for (const Tri& t : tris) {
-      Vec2 uv[3];
-      Vec3 p[3], n[3];
-      Corners(t, uv, p, n);
-      double agreement = TriangleAgreement(uv, p, n);
-      cand.min_agreement = std::min(cand.min_agreement, agreement);
-      m_.MeasureCorners(t, uv, p);
-      cand.measures.push_back(MeasureTriangle(s_, uv, p, c_));
-      PenaliseFold(t, agreement, &cand.measures.back());
-      cand.max_violation = std::max(cand.max_violation, cand.measures.back().violation);
-    }
+    EvaluateBelow(tris, false, 0, 0, &cand);
     return cand;
   }
-  // Evaluate(tris) for a candidate that is wanted only when the fold guard holds (AgreementOk
-  // against old_agree) and wanted(max_violation): false, with *cand partial, as soon as either
-  // fails. wanted must stay false once it is as the violation grows.
-  template <class Wanted>
-  bool EvaluateWanted(const std::vector<Tri>& tris, double old_agree, Wanted wanted,
-                      Candidate* cand) {
+  // The measures of `tris`, their largest violation and smallest agreement into *cand. With
+  // `stop`, for a candidate wanted only when the fold guard holds (AgreementOk against old_agree)
+  // and its max_violation stays below `limit`: false, with *cand partial, once either fails.
+  bool EvaluateBelow(const std::vector<Tri>& tris, bool stop, double old_agree, double limit,
+                     Candidate* cand) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
-    double agreement[64];
-    if (tris.size() > 64) {
-      *cand = Evaluate(tris);
-      return AgreementOk(cand->min_agreement, old_agree) && wanted(cand->max_violation);
-    }
+    std::vector<double>& agreement = agreement_;  // scratch
+    agreement.resize(tris.size());
     for (size_t k = 0; k < tris.size(); ++k) {
       Corners(tris[k], uv, p, n);
       agreement[k] = TriangleAgreement(uv, p, n);
       cand->min_agreement = std::min(cand->min_agreement, agreement[k]);
     }
-    if (!AgreementOk(cand->min_agreement, old_agree)) return false;
-    cand->measures.reserve(tris.size());
+    if (stop && !AgreementOk(cand->min_agreement, old_agree)) return false;
+    cand->measures.resize(tris.size());
     for (size_t k = 0; k < tris.size(); ++k) {
       m_.MeasureCorners(tris[k], uv, p);
-      cand->measures.push_back(MeasureTriangle(s_, uv, p, c_));
-      PenaliseFold(tris[k], agreement[k], &cand->measures.back());
-      cand->max_violation = std::max(cand->max_violation, cand->measures.back().violation);
-      if (!wanted(cand->max_violation)) return false;
+      TriangleMeasure& m = cand->measures[k];
+      if (!stop)
+        m = MeasureTriangle(s_, uv, p, c_);
+      else if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m))
+        return false;
+      PenaliseFold(tris[k], agreement[k], &m);
+      cand->max_violation = std::max(cand->max_violation, m.violation);
+      if (stop && !(cand->max_violation < limit)) return false;
     }
     return true;
   }
-  // Evaluate(tris).max_violation for a smoothing probe of node v, HUGE_VAL when AgreementOk
-  // fails. Once the probe shows it cannot win (the running maximum reaches `limit`, or the fold
-  // guard fails) it returns a value >= limit. v's surface normal is evaluated only when the fold
-  // guard is first needed. Triangles are measured in `order` (worst first at the last full
-  // measurement, which reorders it); a full measurement leaves in `measures` what
-  // Evaluate(tris).measures would hold.
+  // Evaluate(tris).max_violation for a smoothing probe of v; once it cannot win (the maximum
+  // reaches `limit`, or AgreementOk fails) a value >= limit, with the triangle that showed it in
+  // *stopper. v's normal is evaluated when first needed. Measures tris[first] (if >= 0), then
+  // `order` (worst first at the last full measurement, which re-sorts it): the order only changes
+  // how soon a loser stops. A full one leaves in `measures` what Evaluate(tris).measures holds.
   double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
-                       std::vector<int>* order, std::vector<TriangleMeasure>* measures) {
+                       int first, int* stopper, std::vector<int>* order,
+                       std::vector<TriangleMeasure>* measures) {
     Vec2 uv[3];
     Vec3 p[3], n[3];
     double min_agreement = 1, worst = 0;
     bool normal_ready = false;
     measures->resize(tris.size());
-    for (int k : *order) {
+    const int count = static_cast<int>(order->size());
+    for (int j = first >= 0 ? -1 : 0; j < count; ++j) {
+      const int k = j < 0 ? first : (*order)[j];
+      if (j >= 0 && k == first) continue;
+      *stopper = k;
       m_.MeasureCorners(tris[k], uv, p);
       TriangleMeasure& m = (*measures)[k];
       if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m)) return m.violation;
@@ -168,9 +162,14 @@ class Refiner {
     for (int t : tris) v = std::max(v, measure_[t].violation);
     return v;
   }
+  // Agreement(t) is kept in measure_[t].agreement: every measurement that lands in measure_
+  // comes with the fold guard of the same corners (PenaliseFold).
   double MinAgreement(const std::vector<int>& tris) const {
     double a = 1;
-    for (int t : tris) a = std::min(a, Agreement(t));
+    for (int t : tris) {
+      assert(measure_[t].agreement == Agreement(t));
+      a = std::min(a, measure_[t].agreement);
+    }
     return a;
   }
   // An optimisation step may not fold a triangle, nor push agreement below the guard where the
@@ -248,6 +247,8 @@ class Refiner {
   bool sliver_recursion_ = false;
   bool rescue_ = false;  // splits may flip folded children's outer edges (RescueSplit)
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
+  std::vector<int> fan_ring_, fan_nodes_, link_ring_, link_nodes_;  // BestCollapse's scratch
+  std::vector<double> agreement_;                                   // EvaluateBelow's
 };
 
 Status Refiner::RefineToCriteria(int64_t max_triangles) {
@@ -552,29 +553,27 @@ void Refiner::Legalize(int node) {
 bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
   best->w = -1;
   if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
-  std::vector<int> nv = m_.Neighbours(v);
-  std::vector<int> cavity = m_.Ring(v);
+  std::vector<int>&cavity = fan_ring_, &nv = fan_nodes_, &nw = link_nodes_;
+  m_.Fan(v, &cavity, &nv);
   if (nv.size() != cavity.size()) return false;  // not a closed fan
-  double old_agree = MinAgreement(cavity);
+  const double old_agree = MinAgreement(cavity);
   for (int w : nv) {
-    // Link condition: v and w share exactly the two apexes of the triangles on edge v-w.
-    std::vector<int> nw = m_.Neighbours(w);
-    int common = 0;
-    for (int x : nv) common += std::find(nw.begin(), nw.end(), x) != nw.end();
-    if (common != 2) continue;
-    std::vector<int> cav;
     std::vector<Tri> tris;
-    CollapseTris(m_, v, w, &cav, &tris);
-    bool oriented = true;
+    CollapseTris(m_, v, w, cavity, &tris);
+    bool oriented = true;  // the cheap (u,v) test first
     for (const Tri& nt : tris)
       oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
     if (!oriented) continue;
+    // Link condition: v and w share exactly the two apexes of the triangles on edge v-w.
+    m_.Fan(w, &link_ring_, &nw);
+    int common = 0;
+    for (int x : nv) common += std::find(nw.begin(), nw.end(), x) != nw.end();
+    if (common != 2) continue;
     // Wanted only within the slack and better than the best so far.
-    auto wanted = [&](double violation) {
-      return violation <= slack && (best->w < 0 || violation < best->cand.max_violation);
-    };
+    double limit = std::nextafter(slack, HUGE_VAL);
+    if (best->w >= 0) limit = std::min(limit, best->cand.max_violation);
     Candidate cand;
-    if (EvaluateWanted(tris, old_agree, wanted, &cand)) {
+    if (EvaluateBelow(tris, true, old_agree, limit, &cand)) {
       best->w = w, best->cand = std::move(cand), best->tris = std::move(tris);
       best->cavity = cavity;
     }
@@ -601,18 +600,25 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   for (int x : m_.Neighbours(w))
     if (!m_.fixed[x]) movers.push_back(x);
   if (!m_.fixed[w]) movers.push_back(w);
-  std::vector<int> region;
-  for (int x : movers)
-    for (int t : m_.Ring(x))
-      if (std::find(region.begin(), region.end(), t) == region.end()) region.push_back(t);
+  std::vector<int> region = RingsOf(m_, movers);
   std::vector<TriangleMeasure> region_measures;
   for (int t : region) region_measures.push_back(measure_[t]);
   std::vector<std::array<Vec3, 2>> saved_xyz;
   std::vector<Vec2> saved_uv;
   for (int x : movers) saved_uv.push_back(m_.uv[x]), saved_xyz.push_back({m_.xyz[x], m_.normal[x]});
-  for (int x : movers) {
-    if (!m_.fixed[x]) SmoothNode(x);
+  // A region triangle is final once no later mover is its corner: one that still violates then
+  // dooms the attempt, so it stops there (the moves are undone below either way).
+  std::vector<int> last = LastMoves(m_, movers, region);
+  auto doomed = [&](int k) {
+    for (size_t j = 0; j < region.size(); ++j)
+      if (last[j] == k && measure_[region[j]].violation > 1.0) return true;
+    return false;
+  };
+  bool failed = doomed(-1);
+  for (int k = 0; k < static_cast<int>(movers.size()) && !failed; ++k) {
+    if (!m_.fixed[movers[k]]) SmoothNode(movers[k]);
     if (MaxViolation(region) <= 1.0) return true;
+    failed = doomed(k);
   }
   for (int k = static_cast<int>(movers.size()) - 1; k >= 0; --k) {
     int x = movers[k];
@@ -677,8 +683,8 @@ int Refiner::FlipPass() {
 
 bool Refiner::SmoothNode(int v) {
   if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
-  std::vector<int> ring = m_.Ring(v);
-  std::vector<int> nv = m_.Neighbours(v);
+  std::vector<int> ring, nv;
+  m_.Fan(v, &ring, &nv);
   if (nv.size() != ring.size()) return false;
   std::vector<Tri> tris;
   for (int t : ring) tris.push_back(m_.tri[t]);
@@ -701,13 +707,27 @@ bool Refiner::SmoothNode(int v) {
   // that lost), so that probe's point, normal and measures are the result's.
   std::vector<TriangleMeasure> measures, best_measures;
   Vec3 best_xyz, best_normal;
+  // The triangle that stopped the last losing probe in each direction (+u, -u, +v, -v) from the
+  // last winning one: measured first, it most often stops the next probe that way too.
+  int hint[4] = {-1, -1, -1, -1};
+  Vec2 center = uv0;
   auto objective = [&](Vec2 q, double bound) {
     m_.uv[v] = q;  // the (u,v) test first: S and its normal only for oriented probes
     for (const Tri& nt : tris)
       if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
     m_.xyz[v] = s_.Point(q.x, q.y);  // RingViolation evaluates the normal when it needs it
-    double worst = RingViolation(tris, v, old_agree, -bound, &order, &measures);
-    if (worst < -bound) best_xyz = m_.xyz[v], best_normal = m_.normal[v], best_measures = measures;
+    const Vec2 d = q - center;
+    const int dir =
+        std::fabs(d.x * su_) >= std::fabs(d.y * sv_) ? (d.x > 0 ? 0 : 1) : (d.y > 0 ? 2 : 3);
+    int stopper = -1;
+    double worst =
+        RingViolation(tris, v, old_agree, -bound, hint[dir], &stopper, &order, &measures);
+    if (worst < -bound) {
+      best_xyz = m_.xyz[v], best_normal = m_.normal[v], best_measures = measures;
+      center = q;
+    } else {
+      hint[dir] = stopper;
+    }
     return -worst;
   };
   PatternSearchResult res = CrossPatternSearch(
