@@ -316,36 +316,116 @@ bool InsideDomain(const FaceDomain& d, Vec2 p) {
   return inside;
 }
 
+namespace {
+
+// How far the surface normal turns along u (along_u) or along v: for each of five probe lines
+// across the domain, the turn in each of `steps` even steps along it (line-major).
+std::vector<double> TurnSteps(const FaceDomain& d, Surface& s, bool along_u, int steps) {
+  const double du = d.umax - d.umin, dv = d.vmax - d.vmin;
+  std::vector<double> turn;
+  turn.reserve(5 * steps);
+  for (int j = 0; j < 5; ++j) {
+    Vec3 prev;
+    for (int i = 0; i <= steps; ++i) {
+      double a = static_cast<double>(i) / steps, b = (j + 0.5) / 5;
+      double u = d.umin + du * (along_u ? a : b), v = d.vmin + dv * (along_u ? b : a);
+      Vec3 n = s.Normal(u, v);
+      if (i > 0) turn.push_back(std::acos(std::clamp(Dot(n, prev), -1.0, 1.0)));
+      prev = n;
+    }
+  }
+  return turn;
+}
+
+// The largest total turn over the probe lines of TurnSteps.
+double WorstTurn(const std::vector<double>& turn, int steps) {
+  double worst = 0;
+  for (int j = 0; j < 5; ++j) {
+    double total = 0;
+    for (int i = 0; i < steps; ++i) total += turn[j * steps + i];
+    worst = std::max(worst, total);
+  }
+  return worst;
+}
+
+// Seed lines along one parameter: where they cross it, and the width of each one's cell (scaled
+// as for 2D tests).
+struct SeedLines {
+  std::vector<double> at, cell;
+};
+
+// Where `count` seed lines go along one parameter (range [lo, lo + range], scale as the domain's):
+// the middles of even cells, unless the normal turns much faster in part of the range than an
+// even cell can take (a blunt nose at the end of a long hull: all of its turn in the first cell,
+// and a fan from the pole across it). Then the lines, as many as the finely probed turn needs,
+// split it into even parts.
+SeedLines PlaceSeedLines(const FaceDomain& d, Surface& s, bool along_u, int count,
+                         const std::vector<double>& coarse, int coarse_steps, double step) {
+  const double lo = along_u ? d.umin : d.vmin, range = along_u ? d.umax - d.umin : d.vmax - d.vmin;
+  const double scale = along_u ? d.scale_u : d.scale_v;
+  SeedLines lines;
+  for (int i = 0; i < count; ++i) {
+    lines.at.push_back(lo + range * (i + 0.5) / count);
+    lines.cell.push_back(range * scale / count);
+  }
+  double densest = 0;  // the largest turn per whole range
+  for (int i = 0; i < coarse_steps; ++i)
+    for (int j = 0; j < 5; ++j) densest = std::max(densest, coarse[j * coarse_steps + i]);
+  densest *= coarse_steps;
+  if (!(densest / count > 1.5 * step)) return lines;
+  constexpr int kFine = 8;
+  const int steps = kFine * coarse_steps;
+  std::vector<double> turn = TurnSteps(d, s, along_u, steps);
+  std::vector<double> cumulative(steps + 1, 0.0);
+  for (int i = 0; i < steps; ++i) {
+    double most = 0;
+    for (int j = 0; j < 5; ++j) most = std::max(most, turn[j * steps + i]);
+    cumulative[i + 1] = cumulative[i] + most;
+  }
+  const double total = cumulative[steps];
+  if (!(total > 0)) return lines;
+  const int n = std::clamp(static_cast<int>(std::ceil(total / step - 1e-9)), count, 12);
+  std::vector<double> at(n);
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    double target = total * (i + 0.5) / n;
+    while (k + 1 < steps && cumulative[k + 1] < target) ++k;
+    double part = cumulative[k + 1] - cumulative[k];
+    at[i] = (k + (part > 0 ? (target - cumulative[k]) / part : 0.5)) / steps;
+  }
+  lines.at.assign(n, 0);
+  lines.cell.assign(n, 0);
+  for (int i = 0; i < n; ++i) {
+    double from = i > 0 ? 0.5 * (at[i - 1] + at[i]) : 0.0;
+    double to = i + 1 < n ? 0.5 * (at[i] + at[i + 1]) : 1.0;
+    lines.at[i] = lo + range * at[i];
+    lines.cell[i] = range * scale * (to - from);
+  }
+  return lines;
+}
+
+}  // namespace
+
 std::vector<Vec2> SeedPoints(const FaceDomain& d, Surface& s) {
   const int kProbe = 9;
-  double du = d.umax - d.umin, dv = d.vmax - d.vmin;
-  auto turn = [&](bool along_u) {
-    double worst = 0;
-    for (int j = 0; j < 5; ++j) {
-      double total = 0;
-      Vec3 prev;
-      for (int i = 0; i < kProbe; ++i) {
-        double a = static_cast<double>(i) / (kProbe - 1), b = (j + 0.5) / 5;
-        double u = d.umin + du * (along_u ? a : b), v = d.vmin + dv * (along_u ? b : a);
-        Vec3 n = s.Normal(u, v);
-        if (i > 0) total += std::acos(std::clamp(Dot(n, prev), -1.0, 1.0));
-        prev = n;
-      }
-      worst = std::max(worst, total);
-    }
-    return worst;
-  };
   const double kStep = M_PI / 6;
-  int nu = std::clamp(static_cast<int>(std::ceil(turn(true) / kStep - 1e-9)), 1, 12);
-  int nv = std::clamp(static_cast<int>(std::ceil(turn(false) / kStep - 1e-9)), 1, 12);
+  std::vector<double> turn_u = TurnSteps(d, s, true, kProbe - 1);
+  std::vector<double> turn_v = TurnSteps(d, s, false, kProbe - 1);
+  int nu =
+      std::clamp(static_cast<int>(std::ceil(WorstTurn(turn_u, kProbe - 1) / kStep - 1e-9)), 1, 12);
+  int nv =
+      std::clamp(static_cast<int>(std::ceil(WorstTurn(turn_v, kProbe - 1) / kStep - 1e-9)), 1, 12);
   std::vector<Vec2> seeds;
   if (nu * nv <= 1) return seeds;
-  double cell = std::min(du * d.scale_u / nu, dv * d.scale_v / nv);
-  double clearance2 = (0.35 * cell) * (0.35 * cell);
-  for (int j = 0; j < nv; ++j) {
-    for (int i = 0; i < nu; ++i) {
-      Vec2 p{d.umin + du * (i + 0.5) / nu, d.vmin + dv * (j + 0.5) / nv};
+  SeedLines lines_u = PlaceSeedLines(d, s, true, nu, turn_u, kProbe - 1, kStep);
+  SeedLines lines_v = PlaceSeedLines(d, s, false, nv, turn_v, kProbe - 1, kStep);
+  for (size_t j = 0; j < lines_v.at.size(); ++j) {
+    for (size_t i = 0; i < lines_u.at.size(); ++i) {
+      Vec2 p{lines_u.at[i], lines_v.at[j]};
       if (!InsideDomain(d, p)) continue;
+      // Clear of the boundary by 0.35 of its cell's smaller side.
+      double clearance = 0.35 * std::min(lines_u.cell[i], lines_v.cell[j]);
+      double clearance2 = clearance * clearance;
       Vec2 ps{p.x * d.scale_u, p.y * d.scale_v};
       bool clear = true;
       for (const auto& seg : d.segments) {
