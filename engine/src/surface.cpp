@@ -149,6 +149,8 @@ class OcctSurface final : public Surface {
                  pos.Location().XYZ()};
       radius_ = sphere.Radius();
       is_sphere_ = true;
+      u_trig_.resize(size_t{1} << kTrigBits);
+      v_trig_.resize(size_t{1} << kTrigBits);
     }
     if (adaptor_.GetType() != GeomAbs_BSplineSurface) return;
     Handle(Geom_BSplineSurface) bspline = adaptor_.BSpline();
@@ -178,16 +180,35 @@ class OcctSurface final : public Surface {
 
  private:
   // OCCT's sphere evaluation (ElSLib::SphereD0) without the adaptor's dispatch: the same
-  // arithmetic in the same order, so the same bits (surface_test checks it).
-  Vec3 SpherePoint(double u, double v) const {
+  // arithmetic in the same order, so the same bits (surface_test checks it). The cosine and sine
+  // of each parameter come from a small table: refinement's probes often share one of u, v
+  // (a smoothing probe that moves along u keeps the v of every sample around it).
+  Vec3 SpherePoint(double u, double v) {
     const gp_XYZ &x = sphere_[0], &y = sphere_[1], &z = sphere_[2], &o = sphere_[3];
-    double r = radius_ * std::cos(v);
-    double a3 = radius_ * std::sin(v);
-    double a1 = r * std::cos(u);
-    double a2 = r * std::sin(u);
+    const CosSin& cv = Trig(v, v_trig_);
+    const CosSin& cu = Trig(u, u_trig_);
+    double r = radius_ * cv.cos;
+    double a3 = radius_ * cv.sin;
+    double a1 = r * cu.cos;
+    double a2 = r * cu.sin;
     return {a1 * x.X() + a2 * y.X() + a3 * z.X() + o.X(),
             a1 * x.Y() + a2 * y.Y() + a3 * z.Y() + o.Y(),
             a1 * x.Z() + a2 * y.Z() + a3 * z.Z() + o.Z()};
+  }
+
+  // std::cos(t), std::sin(t), remembered by the bits of t in a direct-mapped table.
+  struct CosSin {
+    uint64_t key = 0;
+    bool filled = false;
+    double cos = 0, sin = 0;
+  };
+  static constexpr int kTrigBits = 9;
+  static const CosSin& Trig(double t, std::vector<CosSin>& table) {
+    uint64_t key;
+    std::memcpy(&key, &t, sizeof(t));
+    CosSin& e = table[(key * 0x9E3779B97F4A7C15ull) >> (64 - kTrigBits)];
+    if (!e.filled || e.key != key) e = {key, true, std::cos(t), std::sin(t)};
+    return e;
   }
 
   static constexpr int kSpans = 8;
@@ -225,7 +246,8 @@ class OcctSurface final : public Surface {
   bool is_sphere_ = false;
   std::array<gp_XYZ, 4> sphere_;  // x, y and z directions and centre of a sphere
   double radius_ = 0;
-  std::vector<Span> spans_;  // empty unless B-spline
+  std::vector<CosSin> u_trig_, v_trig_;  // a sphere's cos and sin of recent parameters
+  std::vector<Span> spans_;              // empty unless B-spline
   uint64_t clock_ = 0;
 };
 

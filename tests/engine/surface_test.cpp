@@ -90,6 +90,17 @@ TEST(SurfaceTest, SphereMatchesOcctBitForBit) {
     gp_Pnt p = occt.Value(q.x, q.y);
     ASSERT_TRUE(SameBits(ours->Point(q.x, q.y), {p.X(), p.Y(), p.Z()}));
   }
+  // Points that share a u or a v with earlier ones (the evaluator remembers cos and sin of
+  // recent parameters), in an order that revisits each row and column many times.
+  std::vector<Vec2> grid = Samples(*ours, 40, 5);
+  for (int pass = 0; pass < 3; ++pass) {
+    for (const Vec2& a : grid) {
+      for (const Vec2& b : grid) {
+        gp_Pnt p = occt.Value(a.x, b.y);
+        ASSERT_TRUE(SameBits(ours->Point(a.x, b.y), {p.X(), p.Y(), p.Z()}));
+      }
+    }
+  }
 }
 
 }  // namespace
