@@ -25,8 +25,9 @@ bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
   m_.Fan(v, &cavity, &nv);
   if (nv.size() != cavity.size()) return false;  // not a closed fan
   const double old_agree = MinAgreement(cavity);
+  std::vector<Tri>& tris = collapse_tris_;
+  Candidate& cand = collapse_cand_;
   for (int w : nv) {
-    std::vector<Tri> tris;
     CollapseTris(m_, v, w, cavity, &tris);
     bool oriented = true;  // the cheap (u,v) test first
     for (const Tri& nt : tris)
@@ -40,10 +41,10 @@ bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
     // Wanted only within the slack and better than the best so far.
     double limit = std::nextafter(slack, HUGE_VAL);
     if (best->w >= 0) limit = std::min(limit, best->cand.max_violation);
-    Candidate cand;
+    cand.max_violation = 0, cand.min_agreement = 1;
     if (EvaluateBelow(tris, true, old_agree, limit, &cand)) {
-      best->w = w, best->cand = std::move(cand), best->tris = std::move(tris);
-      best->cavity = cavity;
+      best->w = w, best->cavity = cavity;
+      std::swap(best->cand, cand), std::swap(best->tris, tris);  // the scratch keeps capacity
     }
   }
   return best->w >= 0;
@@ -151,10 +152,12 @@ int Refiner::FlipPass() {
 
 bool Refiner::SmoothNode(int v) {
   if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
-  std::vector<int> ring, nv;
+  SmoothScratch& x = smooth_;  // SmoothNode is not reentrant: its vectors keep their capacity
+  std::vector<int>&ring = x.ring, &nv = x.nodes, &order = x.order;
   m_.Fan(v, &ring, &nv);
   if (nv.size() != ring.size()) return false;
-  std::vector<Tri> tris;
+  std::vector<Tri>& tris = x.tris;
+  tris.clear();
   for (int t : ring) tris.push_back(m_.tri[t]);
   const double old_score = MaxViolation(ring);
   const double old_agree = MinAgreement(ring);
@@ -166,14 +169,14 @@ bool Refiner::SmoothNode(int v) {
     r += std::hypot(d.x * su_, d.y * sv_);
   }
   r /= nv.size();
-  std::vector<int> order(ring.size());  // ring triangles, worst first
+  order.resize(ring.size());  // ring triangles, worst first
   for (size_t k = 0; k < ring.size(); ++k) order[k] = static_cast<int>(k);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
     return measure_[ring[a]].violation > measure_[ring[b]].violation;
   });
   // The search ends at the last probe measured in full (every other value is an upper bound
   // that lost), so that probe's point, normal and measures are the result's.
-  std::vector<TriangleMeasure> measures, best_measures;
+  std::vector<TriangleMeasure>&measures = x.measures, &best_measures = x.best_measures;
   Vec3 best_xyz, best_normal;
   // The triangle that stopped the last losing probe in each direction (+u, -u, +v, -v) from the
   // last winning one: measured first, it most often stops the next probe that way too.

@@ -244,7 +244,14 @@ class Refiner {
   bool rescue_ = false;  // splits may flip folded children's outer edges (RescueSplit)
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
   std::vector<int> fan_ring_, fan_nodes_, link_ring_, link_nodes_;  // BestCollapse's scratch
-  std::vector<double> agreement_;                                   // EvaluateBelow's
+  std::vector<Tri> collapse_tris_;
+  Candidate collapse_cand_;
+  struct SmoothScratch {
+    std::vector<int> ring, nodes, order;
+    std::vector<Tri> tris;
+    std::vector<TriangleMeasure> measures, best_measures;
+  } smooth_;                       // SmoothNode's
+  std::vector<double> agreement_;  // EvaluateBelow's
 };
 
 }  // namespace rdmesh
