@@ -150,22 +150,26 @@ void InitWorkMesh(const std::vector<std::array<int, 3>>& triangles,
 
 std::vector<int> ReplaceCavity(WorkMesh* m, const std::vector<int>& old_tris,
                                const std::vector<Tri>& new_tris) {
-  // Border of the cavity: directed edge -> outside neighbour and kind.
+  // Cavities are small: flat lists searched linearly beat maps (no allocation per edge).
+  // Border of the cavity: directed edge a->b with its outside neighbour and kind.
   struct Border {
+    int a, b;
     int outside;
     EdgeKind kind;
   };
-  std::map<std::pair<int, int>, Border> border;
+  thread_local std::vector<Border> border;
+  border.clear();
   for (int t : old_tris) {
     for (int i = 0; i < 3; ++i) {
       int n = m->nbr[t][i];
       if (n >= 0 && std::find(old_tris.begin(), old_tris.end(), n) != old_tris.end()) continue;
       int a = m->tri[t][(i + 1) % 3], b = m->tri[t][(i + 2) % 3];
-      border[{a, b}] = {n, m->kind[t][i]};
+      border.push_back({a, b, n, m->kind[t][i]});
     }
   }
   for (int t : old_tris) m->alive[t] = 0;
   std::vector<int> ids;
+  ids.reserve(new_tris.size());
   size_t reuse = 0;
   for (const Tri& nt : new_tris) {
     int id;
@@ -186,30 +190,40 @@ std::vector<int> ReplaceCavity(WorkMesh* m, const std::vector<int>& old_tris,
     ids.push_back(id);
   }
   for (; reuse < old_tris.size(); ++reuse) m->free_slots.push_back(old_tris[reuse]);
-  // Link the new triangles to each other and to the border.
-  std::map<std::pair<int, int>, std::pair<int, int>> inner;
-  for (int id : ids)
-    for (int i = 0; i < 3; ++i) inner[{m->tri[id][(i + 1) % 3], m->tri[id][(i + 2) % 3]}] = {id, i};
+  // Link the new triangles to each other and to the border. A directed edge may be listed more
+  // than once (a cavity that is not a disc); as with a map, the last entry wins.
+  auto find_border = [&](int a, int b) -> const Border* {
+    for (size_t k = border.size(); k-- > 0;)
+      if (border[k].a == a && border[k].b == b) return &border[k];
+    return nullptr;
+  };
+  auto find_inner = [&](int a, int b) {
+    int found = -1;
+    for (int id : ids)
+      for (int i = 0; i < 3; ++i)
+        if (m->tri[id][(i + 1) % 3] == a && m->tri[id][(i + 2) % 3] == b) found = id;
+    return found;
+  };
   for (int id : ids) {
     for (int i = 0; i < 3; ++i) {
       int a = m->tri[id][(i + 1) % 3], b = m->tri[id][(i + 2) % 3];
       m->node_tri[m->tri[id][i]] = id;
-      auto in = inner.find({b, a});
-      if (in != inner.end()) {
-        m->nbr[id][i] = in->second.first;
+      int in = find_inner(b, a);
+      if (in >= 0) {
+        m->nbr[id][i] = in;
         m->kind[id][i] = EdgeKind::kFree;
         continue;
       }
-      auto out = border.find({a, b});
-      if (out == border.end()) {  // a new piece of a pole edge (RebuildPoleFan)
+      const Border* out = find_border(a, b);
+      if (!out) {  // a new piece of a pole edge (RebuildPoleFan)
         m->nbr[id][i] = -1;
         m->kind[id][i] =
             m->pole_axis[a] >= 0 && m->pole_axis[b] >= 0 ? EdgeKind::kSplittable : EdgeKind::kFixed;
         continue;
       }
-      m->nbr[id][i] = out->second.outside;
-      m->kind[id][i] = out->second.kind;
-      int o = out->second.outside;
+      m->nbr[id][i] = out->outside;
+      m->kind[id][i] = out->kind;
+      int o = out->outside;
       if (o >= 0) {
         for (int j = 0; j < 3; ++j) {
           if (m->tri[o][(j + 1) % 3] == b && m->tri[o][(j + 2) % 3] == a) m->nbr[o][j] = id;
