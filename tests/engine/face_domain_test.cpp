@@ -34,6 +34,7 @@
 #include <gp_Circ.hxx>
 #include <gp_Pln.hxx>
 #include <string>
+#include <vector>
 
 #include "grids.h"
 #include "heal.h"
@@ -60,6 +61,19 @@ Status Domain(const Model& model, int face_id, const std::vector<EdgeGrid>& grid
 }
 
 double MeshArea(const FaceMesh& f) { return f.area; }
+
+// Meshes `shape` (a model named `name`) at an absolute max deviation (0: the default relative
+// one) into *faces; failing to load or mesh it fails the test.
+void MeshFaces(const TopoDS_Shape& shape, const std::string& name, double max_deviation,
+               std::vector<FaceMesh>* faces) {
+  auto model = LoadShape(shape, name);
+  ASSERT_TRUE(model);
+  MeshOptions options;
+  options.max_deviation = max_deviation;
+  auto result = MeshModel(*model, options);
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  *faces = result->faces;
+}
 
 // A disc of radius 1.5875 with a concentric hole of radius 1.0795 (a face of a real assembly).
 // At a deviation of 1 both circles get the 3 segments a closed edge needs at least, and the two
@@ -100,13 +114,9 @@ TEST(FaceDomainTest, CoarseHoleCrossesTheOuterLoopUntilHealed) {
 }
 
 TEST(FaceDomainTest, CoarseHoleFaceIsMeshed) {
-  auto model = LoadShape(DiscWithHole(), "disc_with_hole_mesh");
-  ASSERT_TRUE(model);
-  MeshOptions options;
-  options.max_deviation = 1.0;
-  auto r = MeshModel(*model, options);
-  ASSERT_TRUE(r.ok()) << r.status().ToString();
-  const FaceMesh& f = r->faces[0];
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(MeshFaces(DiscWithHole(), "disc_with_hole_mesh", 1.0, &faces));
+  const FaceMesh& f = faces[0];
   EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
   // Inscribed polygons: less than the annulus, far more than nothing.
   const double annulus = M_PI * (1.5875 * 1.5875 - 1.0795 * 1.0795);
@@ -124,13 +134,10 @@ TEST(FaceDomainTest, LoopOfTwoOneSegmentEdgesIsHealed) {
   TopoDS_Edge arc = BRepBuilderAPI_MakeEdge(GC_MakeArcOfCircle(circle, a, b, true).Value());
   TopoDS_Edge chord = BRepBuilderAPI_MakeEdge(b, a);
   TopoDS_Wire wire = BRepBuilderAPI_MakeWire(arc, chord).Wire();
-  auto model = LoadShape(BRepBuilderAPI_MakeFace(gp_Pln(gp::XOY()), wire).Face(), "segment");
-  ASSERT_TRUE(model);
-  MeshOptions options;
-  options.max_deviation = 1.0;
-  auto result = MeshModel(*model, options);
-  ASSERT_TRUE(result.ok()) << result.status().ToString();
-  const FaceMesh& f = result->faces[0];
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(
+      MeshFaces(BRepBuilderAPI_MakeFace(gp_Pln(gp::XOY()), wire).Face(), "segment", 1.0, &faces));
+  const FaceMesh& f = faces[0];
   EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
   const double exact = 0.5 * r * r * (M_PI / 3 - std::sin(M_PI / 3));
   EXPECT_GT(MeshArea(f), 0.5 * exact);
@@ -165,12 +172,9 @@ TopoDS_Shape RectangleWithShiftedPcurve(double vertex_tolerance) {
 }
 
 TEST(FaceDomainTest, PcurveGapWithinVertexToleranceIsBridged) {
-  auto model = LoadShape(RectangleWithShiftedPcurve(0.03), "gap_tolerated");
-  ASSERT_TRUE(model);
-  MeshOptions options;
-  auto result = MeshModel(*model, options);
-  ASSERT_TRUE(result.ok()) << result.status().ToString();
-  const FaceMesh& f = result->faces[0];
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(MeshFaces(RectangleWithShiftedPcurve(0.03), "gap_tolerated", 0, &faces));
+  const FaceMesh& f = faces[0];
   EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
   EXPECT_NEAR(MeshArea(f), 50.0, 0.5);
 }
@@ -212,14 +216,11 @@ double BulletDistance(const double* p) {
 // its whole turn that refinement cannot split without folding: the seed lines follow the turn.
 // (Without that, at this deviation, the face misses the criteria and the mesh deviates 7.8x.)
 TEST(FaceDomainTest, BluntNoseOnALongBodyMeetsTheDeviation) {
-  auto model = LoadShape(HalfBullet(), "half_bullet");
-  ASSERT_TRUE(model);
-  MeshOptions options;
-  options.max_deviation = 0.02;
-  auto result = MeshModel(*model, options);
-  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  const double deviation = 0.02;
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(MeshFaces(HalfBullet(), "half_bullet", deviation, &faces));
   double worst = 0;
-  for (const FaceMesh& f : result->faces) {
+  for (const FaceMesh& f : faces) {
     EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
     EXPECT_EQ(f.reason, "");
     // Mesh to surface, at a lattice of points in every triangle.
@@ -234,7 +235,7 @@ TEST(FaceDomainTest, BluntNoseOnALongBodyMeetsTheDeviation) {
         }
     }
   }
-  EXPECT_LE(worst, 1.2 * options.max_deviation);
+  EXPECT_LE(worst, 1.2 * deviation);
 }
 
 }  // namespace
