@@ -98,10 +98,7 @@ std::vector<int> WorkMesh::Ring(int v) const {
 
 std::vector<int> WorkMesh::Neighbours(int v) const {
   std::vector<int> ring, out;
-  ring.reserve(8);
-  out.reserve(8);
-  WalkRing(*this, v, &ring);
-  RingNodes(*this, v, ring, &out);
+  Fan(v, &ring, &out);
   return out;
 }
 

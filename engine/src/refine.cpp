@@ -102,7 +102,7 @@ bool Refiner::SplitTriangle(int t) {
   if (poles == 1 && RealignPole(pole)) return true;
   Vec2 uv[3];
   Vec3 p[3], n[3];
-  Corners(tri, uv, p, n);
+  m_.FoldCorners(tri, uv, p, n);
   const TriangleMeasure& mt = measure_[t];
   // A triangle too long for max_length: split its longest edge in the middle when allowed.
   double dev_ratio = c_.max_deviation > 0 ? mt.deviation / c_.max_deviation : 0;

@@ -42,10 +42,6 @@ class Refiner {
     double min_agreement = 1;
   };
 
-  // Corners of a triangle for the fold guard (pole corners take their neighbours' mean normal).
-  void Corners(const Tri& t, Vec2 uv[3], Vec3 p[3], Vec3 n[3]) const {
-    m_.FoldCorners(t, uv, p, n);
-  }
   Candidate Evaluate(const std::vector<Tri>& tris) {
     Candidate cand;
     EvaluateBelow(tris, false, 0, 0, &cand);
@@ -61,7 +57,7 @@ class Refiner {
     std::vector<double>& agreement = agreement_;  // scratch
     agreement.resize(tris.size());
     for (size_t k = 0; k < tris.size(); ++k) {
-      Corners(tris[k], uv, p, n);
+      m_.FoldCorners(tris[k], uv, p, n);
       agreement[k] = TriangleAgreement(uv, p, n);
       cand->min_agreement = std::min(cand->min_agreement, agreement[k]);
     }
@@ -104,7 +100,7 @@ class Refiner {
       worst = std::max(worst, m.violation);
       if (worst >= limit) return worst;
       if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
-      Corners(tris[k], uv, p, n);
+      m_.FoldCorners(tris[k], uv, p, n);
       double agreement = TriangleAgreement(uv, p, n);
       PenaliseFold(tris[k], agreement, &m);
       min_agreement = std::min(min_agreement, agreement);
@@ -150,7 +146,7 @@ class Refiner {
   double Agreement(int t) const {
     Vec2 uv[3];
     Vec3 p[3], n[3];
-    Corners(m_.tri[t], uv, p, n);
+    m_.FoldCorners(m_.tri[t], uv, p, n);
     return TriangleAgreement(uv, p, n);
   }
   double MaxViolation(const std::vector<int>& tris) const {
