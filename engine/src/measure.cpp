@@ -77,7 +77,7 @@ constexpr int kMaxKnots = 16;
 // Likewise strips of the triangle between knot lines: halved up to kStripPieces, else
 // kStripSteps even strips. Fewer samples for many pieces keep the cost bounded on densely
 // knotted surfaces, whose pieces are small against the triangle anyway.
-constexpr int kEdgePieces = 4, kEdgeSteps = 3, kStripPieces = 2, kStripSteps = 2;
+constexpr int kEdgePieces = 4, kEdgeSteps = 3, kStripPieces = 4, kStripSteps = 4;
 
 // The knot lines of `k` strictly inside (lo, hi), ascending, into at[]: their count, or
 // kMaxKnots + 1 when there are more (then at[] holds the first ones only).
@@ -133,13 +133,22 @@ int ClipPolygon(const Vec2* poly, int n, bool axis_v, double sign, double bound,
   return m;
 }
 
-// The largest height over the plane (p0, nh) of extra samples for a triangle that crosses knot
-// lines, where the one quadratic of FittedPeak cannot follow the surface: each polynomial piece
-// may bulge on its own, a cubic one even both ways. Samples along each edge that crosses knot
-// lines (both triangles of the edge share them: they do not depend on its direction), and
-// across the triangle in strips between the knot lines of one direction (at each strip's vertex
-// mean), as Intervals places them. Returns 0, leaving *where, when no knot line crosses it.
-double KnotPeak(Surface& s, const Vec2 uv[3], Vec3 p0, Vec3 nh, Vec2* where) {
+// The largest height over the plane of p[] (unit normal nh) of extra samples on a B-spline,
+// where the one quadratic of FittedPeak cannot follow the surface: each polynomial piece may
+// bulge on its own, a cubic one even both ways (an S along a long triangle is nearly level with
+// its plane at the edge midpoints). Samples along each edge that crosses knot lines, and along
+// the longest edge even within one piece (at both halves: the samples of an edge do not depend on
+// its direction, so both triangles of the edge share them); and across the triangle in strips
+// between the knot lines of each direction, at each strip's vertex mean, both halves of a
+// triangle within one piece included. Intervals places them all. Returns 0, leaving *where, on
+// a surface without knots.
+double KnotPeak(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec3 nh, Vec2* where) {
+  const Vec3 p0 = p[0];
+  int longest = 0;  // the edge p[i] p[i + 1] most likely to hold a whole S of its piece
+  for (int i = 1; i < 3; ++i) {
+    Vec3 e = p[(i + 1) % 3] - p[i], f = p[(longest + 1) % 3] - p[longest];
+    if (Dot(e, e) > Dot(f, f)) longest = i;
+  }
   if (s.uknots.at.empty() && s.vknots.at.empty()) return 0;
   double best = 0;
   auto sample = [&](Vec2 q) {
@@ -159,7 +168,7 @@ double KnotPeak(Surface& s, const Vec2 uv[3], Vec3 p0, Vec3 nh, Vec2* where) {
       for (int k = 0; k < within; ++k) cut[1 + n + k] = (cut[1 + n + k] - ca) / (cb - ca);
       n += within;
     }
-    if (n == 0) continue;
+    if (n == 0 && i != longest) continue;
     std::sort(cut + 1, cut + 1 + n);
     cut[0] = 0, cut[n + 1] = 1;
     int count = Intervals(cut, n + 1, kEdgePieces, kEdgeSteps, interval);
@@ -173,7 +182,6 @@ double KnotPeak(Surface& s, const Vec2 uv[3], Vec3 p0, Vec3 nh, Vec2* where) {
     double lo = std::min({coord(uv[0]), coord(uv[1]), coord(uv[2])});
     double hi = std::max({coord(uv[0]), coord(uv[1]), coord(uv[2])});
     int n = KnotsWithin(axis_v ? s.vknots : s.uknots, lo, hi, cut + 1);
-    if (n == 0) continue;
     cut[0] = lo, cut[n + 1] = hi;
     int count = Intervals(cut, n + 1, kStripPieces, kStripSteps, interval);
     for (int k = 0; k < count; ++k) {
@@ -241,7 +249,7 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
     double gate = c.max_deviation * (may_stop ? std::min(limit, 1.0) : 1.0);
     if (dev < gate && !(c.min_length > 0 && m.max_length < 2 * c.min_length)) {
       Vec2 knot_uv;
-      double hk = KnotPeak(s, uv, p[0], nh, &knot_uv);
+      double hk = KnotPeak(s, uv, p, nh, &knot_uv);
       if (hk > dev) dev = hk, m.worst_uv = knot_uv;
     } else if (may_stop && dev >= gate && dev < c.max_deviation) {
       stopped = true;

@@ -2,8 +2,9 @@
 // How well one triangle stands for its surface patch, from surface evaluations only:
 // the estimated deviation (largest surface-triangle distance), the representation deficit a
 // split would remove, its longest edge, and whether it is valid (no fold). On a B-spline the
-// deviation also looks between the knot lines the triangle crosses: one quadratic through the
-// edge midpoints cannot follow several polynomial pieces.
+// deviation also looks between the knot lines the triangle crosses and at the halves of each
+// piece: one quadratic through the edge midpoints cannot follow a cubic piece, let alone
+// several.
 
 #include "geom.h"
 #include "surface.h"

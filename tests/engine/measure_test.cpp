@@ -117,5 +117,27 @@ TEST(MeasureTest, SeesBulgesBetweenKnotLines) {
   }
 }
 
+TEST(MeasureTest, SeesBothHalvesOfOnePiece) {
+  std::unique_ptr<Surface> wave = WavySurface();
+  FaceCriteria c;
+  c.max_deviation = 1.0;
+  // Long triangles within one knot span: a cubic piece can turn like an S along them, nearly
+  // level with the chord plane at the edge midpoints and the centroid.
+  std::mt19937 shapes(3);
+  std::uniform_real_distribution<double> span(0, 4), across(0, 1), width(0.05, 0.3), at(0, 1);
+  int low = 0;
+  for (int i = 0; i < 400; ++i) {
+    double u0 = std::floor(span(shapes)) + 0.01, u1 = u0 + 0.98, v0 = across(shapes);
+    Vec2 uv[3] = {
+        {u0, v0}, {u1, across(shapes)}, {u0 + (u1 - u0) * at(shapes), v0 + width(shapes)}};
+    if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
+    Vec3 p[3];
+    for (int k = 0; k < 3; ++k) p[k] = wave->Point(uv[k].x, uv[k].y);
+    double dense = DenseDeviation(*wave, uv, p);
+    if (MeasureTriangle(*wave, uv, p, c).deviation < 0.75 * dense) ++low;
+  }
+  EXPECT_EQ(low, 0);
+}
+
 }  // namespace
 }  // namespace rdmesh
