@@ -51,6 +51,38 @@ void ComputeScale(Surface& s, FaceDomain* d) {
   if (!std::isfinite(d->scale_v) || d->scale_v <= 0) d->scale_v = 1;
 }
 
+// A pcurve may miss its edge by far more than the meshing tolerance and still be valid within a
+// loose edge tolerance (Rhino's trimmed NURBS: up to a third of a segment). Boundary nodes at
+// such (u,v) sit beside the surface point they stand for, and the triangles along the boundary
+// then stand on edge and can neither meet the criteria nor be split without folding. Where
+// S(pcurve) misses a grid point by more than kPcurveMiss of its shorter segment, the node takes
+// the (u,v) where the surface passes through the point instead: Gauss-Newton from the pcurve's
+// (u,v), kept only when it lands on the point (within a tenth of the miss).
+constexpr double kPcurveMiss = 0.01;
+
+Vec2 ProjectNear(Surface& s, Vec2 start, Vec3 target, double miss) {
+  const double hu = 1e-7 * std::max(s.umax - s.umin, 1e-12);
+  const double hv = 1e-7 * std::max(s.vmax - s.vmin, 1e-12);
+  Vec2 q = start;
+  double gap = miss;
+  for (int iter = 0; iter < 8 && gap > 1e-3 * miss; ++iter) {
+    Vec3 p = s.Point(q.x, q.y);
+    Vec3 su = (1.0 / hu) * (s.Point(q.x + hu, q.y) - p);
+    Vec3 sv = (1.0 / hv) * (s.Point(q.x, q.y + hv) - p);
+    Vec3 r = target - p;
+    // Normal equations of the 2x2 least-squares step.
+    double a = Dot(su, su), b = Dot(su, sv), c = Dot(sv, sv);
+    double det = a * c - b * b;
+    if (!(det > 1e-24 * a * c)) break;
+    double ru = Dot(su, r), rv = Dot(sv, r);
+    Vec2 next{q.x + (c * ru - b * rv) / det, q.y + (a * rv - b * ru) / det};
+    double next_gap = Dist(s.Point(next.x, next.y), target);
+    if (!(next_gap < gap)) break;
+    q = next, gap = next_gap;
+  }
+  return gap <= 0.1 * miss ? q : start;
+}
+
 // One edge of a wire as the wire explorer walks it: its grid points' (u,v) in walking order.
 struct EdgeWalk {
   int eid = 0;
@@ -189,13 +221,19 @@ Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGr
           ref.t = g.t[idx];
           xyz = g.xyz[idx];
         }
+        Vec2 uv = w.uv[k];
+        if (ref.dim == 1 && !g.degenerate) {
+          double miss = Dist(surface.Point(uv.x, uv.y), xyz);
+          double segment = std::min(Dist(xyz, g.xyz[idx - 1]), Dist(xyz, g.xyz[idx + 1]));
+          if (miss > kPcurveMiss * segment) uv = ProjectNear(surface, uv, xyz, miss);
+        }
         int node = -1;
         if (ref.dim == 0)  // loops that touch at a vertex share its node
           for (int other : vertex_nodes[ref.entity])
-            if (d->uv[other].x == w.uv[k].x && d->uv[other].y == w.uv[k].y) node = other;
+            if (d->uv[other].x == uv.x && d->uv[other].y == uv.y) node = other;
         if (node < 0) {
           node = static_cast<int>(d->uv.size());
-          d->uv.push_back(w.uv[k]);
+          d->uv.push_back(uv);
           d->xyz.push_back(xyz);
           d->ref.push_back(ref);
           if (ref.dim == 0) vertex_nodes[ref.entity].push_back(node);

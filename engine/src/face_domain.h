@@ -52,7 +52,9 @@ struct FaceDomain {
 
 /// Builds the domain of face `face_id` (its FORWARD orientation) from the edge grids (indexed
 /// by edge id - 1). Consecutive pcurves are joined across gaps that the vertex tolerance allows
-/// and across whole periods of a periodic surface. Fails with a reason that names the edges for
+/// and across whole periods of a periodic surface. An edge grid point whose pcurve (u,v) misses
+/// it on the surface (a loose pcurve, within a large edge tolerance) takes the nearby (u,v) where
+/// the surface passes through it. Fails with a reason that names the edges for
 /// bad pcurves and loops that do not close.
 Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
                        Surface& surface, FaceDomain* domain);

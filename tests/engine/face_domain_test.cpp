@@ -18,9 +18,14 @@
 #include <BRep_Tool.hxx>
 #include <GC_MakeArcOfCircle.hxx>
 #include <GC_MakeSegment.hxx>
+#include <Geom2dAPI_Interpolate.hxx>
+#include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_Line.hxx>
 #include <GeomConvert_CompCurveToBSplineCurve.hxx>
 #include <Geom_BSplineCurve.hxx>
+#include <Geom_SphericalSurface.hxx>
+#include <TColStd_HArray1OfReal.hxx>
+#include <TColgp_HArray1OfPnt2d.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
@@ -31,6 +36,7 @@
 #include <cmath>
 #include <filesystem>
 #include <gp_Ax2.hxx>
+#include <gp_Ax3.hxx>
 #include <gp_Circ.hxx>
 #include <gp_Pln.hxx>
 #include <string>
@@ -236,6 +242,53 @@ TEST(FaceDomainTest, BluntNoseOnALongBodyMeetsTheDeviation) {
     }
   }
   EXPECT_LE(worst, 1.2 * deviation);
+}
+
+// A patch of the unit sphere, longitude [0, pi/2] by latitude [0, pi/3], whose top edge (the
+// circle of latitude pi/3) has a pcurve that bulges out by up to `bulge` in latitude: S(pcurve)
+// misses the edge's 3D points by up to `bulge`, within the edge's tolerance (as in Rhino's
+// trimmed NURBS, e.g. axom_boxed_sphere's patches).
+TopoDS_Shape SpherePatchWithLoosePcurve(double bulge) {
+  Handle(Geom_SphericalSurface) sphere = new Geom_SphericalSurface(gp_Ax3(gp::XOY()), 1.0);
+  TopoDS_Face face = BRepBuilderAPI_MakeFace(sphere, 0, M_PI / 2, 0, M_PI / 3, 1e-7).Face();
+  BRep_Builder builder;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+    TopoDS_Edge e = TopoDS::Edge(ex.Current());
+    double f, l;
+    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, f, l);
+    gp_Pnt2d a = pcurve->Value(f), b = pcurve->Value(l);
+    if (std::fabs(a.Y() - M_PI / 3) > 1e-9 || std::fabs(b.Y() - M_PI / 3) > 1e-9) continue;
+    const int n = 17;
+    Handle(TColgp_HArray1OfPnt2d) points = new TColgp_HArray1OfPnt2d(1, n);
+    Handle(TColStd_HArray1OfReal) params = new TColStd_HArray1OfReal(1, n);
+    for (int i = 1; i <= n; ++i) {
+      double t = f + (l - f) * (i - 1) / (n - 1);
+      gp_Pnt2d q = pcurve->Value(t);
+      points->SetValue(i, gp_Pnt2d(q.X(), q.Y() + bulge * std::sin(M_PI * (t - f) / (l - f))));
+      params->SetValue(i, t);
+    }
+    Geom2dAPI_Interpolate interpolate(points, params, false, 1e-9);
+    interpolate.Perform();
+    builder.UpdateEdge(e, interpolate.Curve(), face, 1.5 * bulge);
+  }
+  return face;
+}
+
+// Triangles along the loose edge, between its 3D points and surface points placed through the
+// pcurve, stand on edge: refinement cannot split them without folding and misses the criteria
+// (here 2.4x). The boundary nodes take the (u,v) where the surface passes through their points
+// instead. (The edge's chords themselves stay as coarse as its tolerance allows, grids.cpp's
+// min_length: this test judges the face's refinement, not them.)
+TEST(FaceDomainTest, LoosePcurveFaceMeetsTheCriteria) {
+  const double deviation = 0.002;
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(
+      MeshFaces(SpherePatchWithLoosePcurve(0.1), "loose_pcurve", deviation, &faces));
+  ASSERT_EQ(faces.size(), 1u);
+  const FaceMesh& f = faces[0];
+  EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+  EXPECT_EQ(f.reason, "");
+  EXPECT_LE(f.max_deviation, deviation * (1 + 1e-9));
 }
 
 }  // namespace
