@@ -8,7 +8,8 @@
 
 namespace rdmesh {
 
-SegmentMeasure MeasureSegment(Curve& curve, double a, double b) {
+SegmentMeasure MeasureSegment(Curve& curve, double a, double b,
+                              const std::vector<EdgeSide>* sides) {
   SegmentMeasure m;
   Vec3 pa = curve.Point(a), pb = curve.Point(b);
   m.chord = Dist(pa, pb);
@@ -22,9 +23,23 @@ SegmentMeasure MeasureSegment(Curve& curve, double a, double b) {
       },
       a, b, 5, 14, &sum);
   double far_value = 0;
-  MaximizeOnInterval([&](double t) { return PointSegmentDistance(curve.Point(t), pa, pb); }, a, b,
-                     5, 12, &far_value);
+  double far =
+      MaximizeOnInterval([&](double t) { return PointSegmentDistance(curve.Point(t), pa, pb); }, a,
+                         b, 5, 12, &far_value);
   m.sagitta = far_value;
+  if (sides && !sides->empty() && far_value > 0) {
+    // The sagitta vector, from the chord to the farthest point, split along each face's normal.
+    Vec3 p = curve.Point(far), d = pb - pa;
+    double len2 = Dot(d, d);
+    double s = len2 > 0 ? std::clamp(Dot(p - pa, d) / len2, 0.0, 1.0) : 0.0;
+    Vec3 sag = p - (pa + s * d);
+    for (const EdgeSide& side : *sides) {
+      Vec3 n = side.normal(far);
+      double h = Dot(sag, n);
+      double tangential = std::sqrt(std::max(0.0, Dot(sag, sag) - h * h));
+      m.across = std::max(m.across, tangential / side.max_overshoot);
+    }
+  }
   // One split recovers 3/4 of the length a segment misses (the deficit falls as 1/n^2), so the
   // segment's own RD (L_S - L_E) / L_E is 4/3 of the gain of its best split.
   m.rd = m.chord > 0 ? (sum / m.chord - 1.0) * 4.0 / 3.0 : INFINITY;
@@ -37,6 +52,7 @@ double SegmentViolation(const SegmentMeasure& m, const EdgeGridCriteria& c) {
   if (c.max_sagitta > 0) v = std::max(v, m.sagitta / c.max_sagitta);
   if (c.rd_tolerance > 0) v = std::max(v, m.rd / c.rd_tolerance);
   if (c.max_length > 0) v = std::max(v, m.chord / c.max_length);
+  v = std::max(v, m.across);
   if (m.chord == 0 && m.sagitta > 0) v = INFINITY;  // a closed segment
   return v;
 }
@@ -50,6 +66,7 @@ double SizeFactor(const SegmentMeasure& m, const EdgeGridCriteria& c) {
   if (c.max_sagitta > 0 && m.sagitta > 0) f = std::min(f, std::sqrt(c.max_sagitta / m.sagitta));
   if (c.rd_tolerance > 0 && m.rd > 0) f = std::min(f, std::sqrt(c.rd_tolerance / m.rd));
   if (c.max_length > 0 && m.chord > 0) f = std::min(f, c.max_length / m.chord);
+  if (m.across > 0) f = std::min(f, std::sqrt(1.0 / m.across));
   return f;
 }
 
@@ -67,7 +84,7 @@ std::vector<Segment> Refine(Curve& curve, double first, double last, const EdgeG
   for (int i = 0; i < min_segments; ++i) {
     double a = first + (last - first) * i / min_segments;
     double b = i + 1 == min_segments ? last : first + (last - first) * (i + 1) / min_segments;
-    SegmentMeasure m = MeasureSegment(curve, a, b);
+    SegmentMeasure m = MeasureSegment(curve, a, b, &c.sides);
     segs.push_back({a, b, m, SegmentViolation(m, c)});
   }
   auto worse = [&](int i, int j) { return segs[i].violation < segs[j].violation; };
@@ -83,7 +100,8 @@ std::vector<Segment> Refine(Curve& curve, double first, double last, const EdgeG
     double span = s.b - s.a;
     // keep the split well inside the segment
     t = std::clamp(t, s.a + 0.1 * span, s.b - 0.1 * span);
-    SegmentMeasure left = MeasureSegment(curve, s.a, t), right = MeasureSegment(curve, t, s.b);
+    SegmentMeasure left = MeasureSegment(curve, s.a, t, &c.sides),
+                   right = MeasureSegment(curve, t, s.b, &c.sides);
     segs[i] = {s.a, t, left, SegmentViolation(left, c)};
     segs.push_back({t, s.b, right, SegmentViolation(right, c)});
     queue.push(i);
@@ -145,7 +163,8 @@ std::vector<double> DiscretizeCurve(Curve& curve, double first, double last,
       if (!(ts[k + 1] > ts[k]))
         ok = false;
       else
-        ok = SegmentViolation(MeasureSegment(curve, ts[k], ts[k + 1]), criteria) <= 1.0;
+        ok = SegmentViolation(MeasureSegment(curve, ts[k], ts[k + 1], &criteria.sides), criteria) <=
+             1.0;
     }
     if (ok) return ts;
   }

@@ -8,18 +8,29 @@
 //    that meet the criteria; the points are placed so that every segment carries the same share
 //    of it (equal sagittas on a circle), then checked exactly.
 
+#include <functional>
 #include <vector>
 
 #include "surface.h"
 
 namespace rdmesh {
 
+/// A face beside the edge. A chord strays from the curve within the face's tangent plane by the
+/// tangential part of its sagitta: its triangles cover ground outside the face (a hole's chord
+/// reaches over the hole) or leave some of it bare. On a face that is narrow next to the
+/// tolerance, that part must stay a small fraction of the face's width.
+struct EdgeSide {
+  std::function<Vec3(double t)> normal;  ///< the face's unit normal at C(t) (zero where undefined)
+  double max_overshoot = 0;              ///< largest tangential sagitta, model units
+};
+
 struct EdgeGridCriteria {
-  double max_sagitta = 0;   ///< largest curve-chord distance, model units; 0 = off
-  double rd_tolerance = 0;  ///< largest segment RD (L_S - L_E) / L_E; 0 = off
-  double max_length = 0;    ///< longest chord, model units; 0 = off
-  double min_length = 0;    ///< never split a chord shorter than twice this; 0 = off
-  int min_segments = 1;     ///< closed edges need 3
+  double max_sagitta = 0;       ///< largest curve-chord distance, model units; 0 = off
+  double rd_tolerance = 0;      ///< largest segment RD (L_S - L_E) / L_E; 0 = off
+  double max_length = 0;        ///< longest chord, model units; 0 = off
+  double min_length = 0;        ///< never split a chord shorter than twice this; 0 = off
+  int min_segments = 1;         ///< closed edges need 3
+  std::vector<EdgeSide> sides;  ///< narrow faces beside the edge; usually none
 };
 
 /// What one segment [a, b] of a curve looks like to the criteria.
@@ -28,10 +39,13 @@ struct SegmentMeasure {
   double sagitta = 0;  ///< largest distance from the curve to the chord
   double rd = 0;       ///< (L_S - L_E) / L_E, from the gain of the best split (x 4/3)
   double split = 0;    ///< t*, the parameter of the best split
+  double across = 0;   ///< largest tangential sagitta / EdgeSide::max_overshoot over the sides
 };
 
-/// Measures [a, b] with a derivative-free search for the farthest / best split point.
-SegmentMeasure MeasureSegment(Curve& curve, double a, double b);
+/// Measures [a, b] with a derivative-free search for the farthest / best split point; `sides`
+/// (may be null or empty) also gives SegmentMeasure::across, at the farthest point.
+SegmentMeasure MeasureSegment(Curve& curve, double a, double b,
+                              const std::vector<EdgeSide>* sides = nullptr);
 
 /// How far a segment is from meeting the criteria: <= 1 means it meets them.
 double SegmentViolation(const SegmentMeasure& m, const EdgeGridCriteria& c);

@@ -3,13 +3,18 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <BRepAdaptor_Curve.hxx>
 #include <BRep_Tool.hxx>
+#include <Geom2d_Curve.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
+#include <algorithm>
+#include <cmath>
 #include <unordered_map>
 
 #include "edge_grid.h"
@@ -29,6 +34,8 @@ bool Developable(const TopoDS_Face& face) {
 
 // Polyline samples that decide whether an edge is shorter than its tolerance.
 constexpr int kLengthSamples = 8;
+// Polyline samples of an edge's length in a face's perimeter (for its width).
+constexpr int kWidthSamples = 16;
 
 // The two vertices of a collapsed (non-degenerate, shorter than tolerance) edge are one node:
 // every grid names the smallest vertex id of its group and takes that vertex's point, so all
@@ -64,6 +71,76 @@ void MergeCollapsedEdgeVertices(const Model& model, std::vector<EdgeGrid>* grids
   }
 }
 
+// Per face id - 1: the largest tangential sagitta its edges' chords may have,
+// narrow_face_fraction x area / perimeter (seams and degenerate edges are no boundary), or
+// infinity where that is no tighter than the deviation (which bounds the whole sagitta) or
+// where the face is narrower than the deviation.
+std::vector<double> NarrowFaceLimits(const Model& model, const GridCriteria& gc,
+                                     tbb::task_arena& arena) {
+  const int nf = model.face_count(), ne = model.edge_count();
+  std::vector<double> limit(nf, INFINITY);
+  if (!(gc.max_deviation > 0) || !(gc.narrow_face_fraction > 0)) return limit;
+  const double width = gc.max_deviation / gc.narrow_face_fraction;  // area / perimeter below it
+  std::vector<double> length(ne, 0.0);
+  arena.execute([&] {
+    tbb::parallel_for(1, ne + 1, [&](int e) {
+      const TopoDS_Edge& edge = model.edge(e);
+      if (BRep_Tool::Degenerated(edge)) return;
+      try {
+        BRepAdaptor_Curve curve(edge);
+        const double t0 = curve.FirstParameter(), t1 = curve.LastParameter();
+        gp_Pnt prev = curve.Value(t0);
+        for (int k = 1; k <= kWidthSamples; ++k) {
+          gp_Pnt p = curve.Value(t0 + (t1 - t0) * k / kWidthSamples);
+          length[e - 1] += prev.Distance(p);
+          prev = p;
+        }
+      } catch (const Standard_Failure&) {
+        length[e - 1] = 0;
+      }
+    });
+    tbb::parallel_for(1, nf + 1, [&](int f) {
+      const TopoDS_Face& face = model.face(f);
+      double area = model.face_area[f - 1], perimeter = 0;
+      for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+        const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+        if (!BRep_Tool::IsClosed(edge, face)) perimeter += length[model.edges.FindIndex(edge) - 1];
+      }
+      // Narrower than the deviation, a face is not resolved at all: it may stand as a line.
+      if (perimeter > 0 && area / perimeter < width && area / perimeter >= gc.max_deviation)
+        limit[f - 1] = gc.narrow_face_fraction * area / perimeter;
+    });
+  });
+  return limit;
+}
+
+// The faces beside an edge whose limit is below `max_sagitta`, as EdgeGrid sides: each holds
+// its own surface evaluator and pcurve (one thread uses them).
+std::vector<EdgeSide> NarrowSides(const Model& model, const TopoDS_Edge& edge,
+                                  const TopTools_ListOfShape* faces,
+                                  const std::vector<double>& limit, double max_sagitta) {
+  std::vector<EdgeSide> sides;
+  if (!faces) return sides;
+  std::vector<int> seen;
+  for (const TopoDS_Shape& shape : *faces) {
+    int f = model.faces.FindIndex(shape);
+    if (f <= 0 || std::find(seen.begin(), seen.end(), f) != seen.end()) continue;
+    seen.push_back(f);
+    if (!(limit[f - 1] < max_sagitta)) continue;
+    const TopoDS_Face& face = TopoDS::Face(shape);
+    double first, last;
+    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last);
+    if (pcurve.IsNull()) continue;
+    std::shared_ptr<Surface> surface = MakeFaceSurface(face, false);
+    sides.push_back({[surface, pcurve](double t) {
+                       gp_Pnt2d q = pcurve->Value(t);
+                       return surface->Normal(q.X(), q.Y());
+                     },
+                     limit[f - 1]});
+  }
+  return sides;
+}
+
 }  // namespace
 
 Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
@@ -87,6 +164,9 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
   }
   for (int e = 1; e <= ne; ++e)
     factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
+
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  const std::vector<double> narrow = NarrowFaceLimits(model, gc, arena);
 
   auto build = [&](int e, bool params) {
     if (!edge_needed.empty() && !edge_needed[e - 1] && !params) return;
@@ -115,6 +195,7 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
           Vec3 start = curve->Point(f), end = curve->Point(l), mid = curve->Point(0.5 * (f + l));
           bool loops = g.first_vertex == g.last_vertex || Dist(start, end) < 0.5 * Dist(start, mid);
           c.min_segments = loops ? 3 : 1;
+          c.sides = NarrowSides(model, edge, edge_faces.Seek(model.edge(e)), narrow, c.max_sagitta);
           g.t = DiscretizeCurve(*curve, f, l, c);
           // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
           // and faces see it as a pole segment (its pcurve may still span the face).
@@ -138,7 +219,6 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
   };
   std::vector<int> sources, copies;
   for (int e = 1; e <= ne; ++e) (source[e - 1] == e ? sources : copies).push_back(e);
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
   arena.execute([&] {
     tbb::parallel_for(0, static_cast<int>(sources.size()), [&](int i) {
       if (context && context->ShouldStop()) return;

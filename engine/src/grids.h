@@ -21,6 +21,12 @@ struct GridCriteria {
   /// triangle with a side of length a on a sphere deviates a^2/6 k where the side's own sagitta
   /// is a^2/8 k, so its boundary segments should be shorter than a pure curve criterion asks.
   double curved_face_factor = 0.8;
+  /// On a face whose width, measured as area / perimeter (w / 2 for a strip of width w), lies
+  /// between max_deviation and max_deviation / this, the tangential part of an edge chord's
+  /// sagitta (how far the chord strays within the face: over a hole, or short of the rim)
+  /// stays below this fraction of that width. A chord then takes or adds at most about 2/3 of
+  /// this fraction of its share of the face's area. 0 = off.
+  double narrow_face_fraction = 0.5;
 };
 
 /// Grids indexed by edge id - 1. `edge_needed[e-1]` false skips an edge (face subsets).
