@@ -394,12 +394,10 @@ struct SeedLines {
 };
 
 // Where `count` seed lines go along one parameter (range [lo, lo + range], scale as the domain's):
-// the middles of even cells, unless the face has a pole and the normal turns much faster in part
-// of the range than an even cell can take (a blunt nose at the end of a long hull: all of its
-// turn in the first cell, and a fan from the pole across it). Then the lines, as many as the
-// finely probed turn needs, split it into even parts. Faces without a pole keep even cells: on
-// them uneven lines left folds on axom_boxed_sphere's B-spline patches at 1e-3 (though they
-// helped gmsh_wrenchnut at 1e-4).
+// the middles of even cells, unless the normal turns much faster in part of the range than an
+// even cell can take (a blunt nose at the end of a long hull: all of its turn in the first cell,
+// and a fan from the pole across it; a tight blend along one side of a B-spline patch). Then the
+// lines, as many as the finely probed turn needs, split it into even parts.
 SeedLines PlaceSeedLines(const FaceDomain& d, Surface& s, bool along_u, int count,
                          const std::vector<double>& coarse, int coarse_steps, double step) {
   const double lo = along_u ? d.umin : d.vmin, range = along_u ? d.umax - d.umin : d.vmax - d.vmin;
@@ -413,9 +411,7 @@ SeedLines PlaceSeedLines(const FaceDomain& d, Surface& s, bool along_u, int coun
   for (int i = 0; i < coarse_steps; ++i)
     for (int j = 0; j < 5; ++j) densest = std::max(densest, coarse[j * coarse_steps + i]);
   densest *= coarse_steps;
-  const bool pole = std::find(d.segment_splittable.begin(), d.segment_splittable.end(), true) !=
-                    d.segment_splittable.end();
-  if (!pole || !(densest / count > 1.5 * step)) return lines;
+  if (!(densest / count > 1.5 * step)) return lines;
   constexpr int kFine = 8;
   const int steps = kFine * coarse_steps;
   std::vector<double> turn = TurnSteps(d, s, along_u, steps);

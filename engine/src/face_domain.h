@@ -76,10 +76,10 @@ std::string DescribeConflict(const FaceDomain& domain, const DomainConflict& con
 
 /// Interior seed points for curved faces: a coarse (u,v) grid, spaced by how far the surface
 /// normal turns, so that no starting triangle spans more than ~45 degrees of the surface. Grid
-/// lines are even along a parameter unless the face has a pole and the turn is concentrated in
-/// part of its range (a blunt nose on a long body); then they split the turn into even parts, so
-/// that the pole of such a nose gets a ring of seeds at one distance instead of fans across the
-/// whole nose.
+/// lines are even along a parameter unless the turn is concentrated in part of its range (a blunt
+/// nose on a long body, a tight blend along one side of a patch); then they split the turn into
+/// even parts, so that the pole of such a nose gets a ring of seeds at one distance instead of
+/// fans across the whole nose, and the blend gets lines of its own.
 std::vector<Vec2> SeedPoints(const FaceDomain& domain, Surface& surface);
 
 /// True when p lies inside the domain (even-odd rule over all boundary segments).
