@@ -82,6 +82,17 @@ double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3]) {
   return worst;
 }
 
+// Whether the estimate reads the long triangle {u0, v0}, {u1, v1}, {u0 + (u1 - u0) at, v0 + width}
+// below 0.75x of its dense deviation.
+bool UnderReads(Surface& s, const FaceCriteria& c, double u0, double u1, double v0, double v1,
+                double at, double width) {
+  Vec2 uv[3] = {{u0, v0}, {u1, v1}, {u0 + (u1 - u0) * at, v0 + width}};
+  if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
+  Vec3 p[3];
+  for (int k = 0; k < 3; ++k) p[k] = s.Point(uv[k].x, uv[k].y);
+  return MeasureTriangle(s, uv, p, c).deviation < 0.75 * DenseDeviation(s, uv, p);
+}
+
 TEST(MeasureTest, SeesBulgesBetweenKnotLines) {
   std::unique_ptr<Surface> wave = WavySurface();
   ASSERT_EQ(wave->uknots.at.size(), 5u);
@@ -94,14 +105,8 @@ TEST(MeasureTest, SeesBulgesBetweenKnotLines) {
   int low = 0;
   for (int i = 0; i < 400; ++i) {
     double u0 = start(shapes), u1 = std::min(4.0, u0 + length(shapes)), v0 = across(shapes);
-    Vec2 uv[3] = {
-        {u0, v0}, {u1, across(shapes)}, {u0 + (u1 - u0) * start(shapes), v0 + width(shapes)}};
-    if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
-    Vec3 p[3];
-    for (int k = 0; k < 3; ++k) p[k] = wave->Point(uv[k].x, uv[k].y);
-    double dense = DenseDeviation(*wave, uv, p);
-    double estimate = MeasureTriangle(*wave, uv, p, c).deviation;
-    if (estimate < 0.75 * dense) ++low;
+    double v1 = across(shapes), at = start(shapes);
+    low += UnderReads(*wave, c, u0, u1, v0, v1, at, width(shapes));
   }
   EXPECT_EQ(low, 0);  // 4 of them without the knot-line samples
   // MeasureTriangleBelow agrees with it here too, knot samples included.
@@ -128,13 +133,8 @@ TEST(MeasureTest, SeesBothHalvesOfOnePiece) {
   int low = 0;
   for (int i = 0; i < 400; ++i) {
     double u0 = std::floor(span(shapes)) + 0.01, u1 = u0 + 0.98, v0 = across(shapes);
-    Vec2 uv[3] = {
-        {u0, v0}, {u1, across(shapes)}, {u0 + (u1 - u0) * at(shapes), v0 + width(shapes)}};
-    if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
-    Vec3 p[3];
-    for (int k = 0; k < 3; ++k) p[k] = wave->Point(uv[k].x, uv[k].y);
-    double dense = DenseDeviation(*wave, uv, p);
-    if (MeasureTriangle(*wave, uv, p, c).deviation < 0.75 * dense) ++low;
+    double v1 = across(shapes), where = at(shapes);
+    low += UnderReads(*wave, c, u0, u1, v0, v1, where, width(shapes));
   }
   EXPECT_EQ(low, 0);
 }
