@@ -137,19 +137,19 @@ int ClipPolygon(const Vec2* poly, int n, bool axis_v, double sign, double bound,
 // where the one quadratic of FittedPeak cannot follow the surface: each polynomial piece may
 // bulge on its own, a cubic one even both ways (an S along a long triangle is nearly level with
 // its plane at the edge midpoints). Samples along each edge that crosses knot lines, and along
-// the longest edge even within one piece (at both halves: the samples of an edge do not depend on
-// its direction, so both triangles of the edge share them); and across the triangle in strips
+// the longest edge even within one piece (an edge's samples do not depend on its direction, so
+// the triangles on either side of it see the same points); and across the triangle in strips
 // between the knot lines of each direction, at each strip's vertex mean, both halves of a
 // triangle within one piece included. Intervals places them all. Returns 0, leaving *where, on
 // a surface without knots.
 double KnotPeak(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec3 nh, Vec2* where) {
+  if (s.uknots.at.empty() && s.vknots.at.empty()) return 0;
   const Vec3 p0 = p[0];
   int longest = 0;  // the edge p[i] p[i + 1] most likely to hold a whole S of its piece
   for (int i = 1; i < 3; ++i) {
     Vec3 e = p[(i + 1) % 3] - p[i], f = p[(longest + 1) % 3] - p[longest];
     if (Dot(e, e) > Dot(f, f)) longest = i;
   }
-  if (s.uknots.at.empty() && s.vknots.at.empty()) return 0;
   double best = 0;
   auto sample = [&](Vec2 q) {
     double h = std::fabs(Dot(nh, s.Point(q.x, q.y) - p0));
