@@ -3,7 +3,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <BRepAdaptor_Curve.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom2d_Curve.hxx>
 #include <Standard_Failure.hxx>
@@ -36,6 +35,18 @@ bool Developable(const TopoDS_Face& face) {
 constexpr int kLengthSamples = 8;
 // Polyline samples of an edge's length in a face's perimeter (for its width).
 constexpr int kWidthSamples = 16;
+
+// The length of the polyline through `samples` + 1 even parameter steps of [f, l].
+double PolylineLength(Curve& curve, double f, double l, int samples) {
+  double length = 0;
+  Vec3 prev = curve.Point(f);
+  for (int k = 1; k <= samples; ++k) {
+    Vec3 x = curve.Point(f + (l - f) * k / samples);
+    length += Dist(prev, x);
+    prev = x;
+  }
+  return length;
+}
 
 // The two vertices of a collapsed (non-degenerate, shorter than tolerance) edge are one node:
 // every grid names the smallest vertex id of its group and takes that vertex's point, so all
@@ -87,14 +98,9 @@ std::vector<double> NarrowFaceLimits(const Model& model, const GridCriteria& gc,
       const TopoDS_Edge& edge = model.edge(e);
       if (BRep_Tool::Degenerated(edge)) return;
       try {
-        BRepAdaptor_Curve curve(edge);
-        const double t0 = curve.FirstParameter(), t1 = curve.LastParameter();
-        gp_Pnt prev = curve.Value(t0);
-        for (int k = 1; k <= kWidthSamples; ++k) {
-          gp_Pnt p = curve.Value(t0 + (t1 - t0) * k / kWidthSamples);
-          length[e - 1] += prev.Distance(p);
-          prev = p;
-        }
+        double t0, t1;
+        BRep_Tool::Range(edge, t0, t1);
+        length[e - 1] = PolylineLength(*MakeEdgeCurve(edge), t0, t1, kWidthSamples);
       } catch (const Standard_Failure&) {
         length[e - 1] = 0;
       }
@@ -199,14 +205,8 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
           g.t = DiscretizeCurve(*curve, f, l, c);
           // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
           // and faces see it as a pole segment (its pcurve may still span the face).
-          double length = 0;
-          Vec3 prev = curve->Point(f);
-          for (int k = 1; k <= kLengthSamples; ++k) {
-            Vec3 x = curve->Point(f + (l - f) * k / kLengthSamples);
-            length += Dist(prev, x);
-            prev = x;
-          }
-          if (length <= BRep_Tool::Tolerance(edge)) g.t = {f, l}, g.degenerate = true;
+          if (PolylineLength(*curve, f, l, kLengthSamples) <= BRep_Tool::Tolerance(edge))
+            g.t = {f, l}, g.degenerate = true;
         }
       } else {
         g.t = (*grids)[source[e - 1] - 1].t;
