@@ -6,12 +6,16 @@
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <signal.h>
+#include <stdlib.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -21,6 +25,7 @@
 #include "grpc/health/v1/health.pb.h"
 #include "log.h"
 #include "rdmesh_service.h"
+#include "worker.h"
 
 #ifndef RDMESH_VERSION
 #define RDMESH_VERSION "dev"
@@ -40,6 +45,34 @@ struct Flags {
   std::string token_file;
   double grace_seconds = 10.0;
 };
+
+/// `rdmeshd --worker-fd N ...`: a worker process started by the daemon (not for people).
+int WorkerMain(int argc, char** argv) {
+  rdmesh::server::WorkerConfig config;
+  std::string log_format = "text";
+  std::string log_level = "info";
+  CLI::App app{"rdmeshd worker process (started by rdmeshd)"};
+  app.add_option("--worker-fd", config.fd)->required();
+  app.add_option("--worker-memory", config.memory_bytes);
+  app.add_option("--cache-bytes", config.cache_bytes);
+  app.add_option("--max-model-bytes", config.max_model_bytes);
+  app.add_option("--log-format", log_format);
+  app.add_option("--log-level", log_level);
+  CLI11_PARSE(app, argc, argv);
+  rdmesh::server::InitLogging(
+      log_format == "json" ? rdmesh::server::LogFormat::kJson : rdmesh::server::LogFormat::kText,
+      log_level);
+  rlimit no_core{0, 0};  // a crashing worker writes no core file
+  setrlimit(RLIMIT_CORE, &no_core);
+  return rdmesh::server::RunWorker(config);
+}
+
+/// This program's own path, to start workers from.
+std::string SelfPath() {
+  std::error_code error;
+  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  return error ? std::string() : self.string();
+}
 
 void LogFromGrpc(gpr_log_func_args* args) {
   spdlog::level::level_enum level = spdlog::level::info;
@@ -64,6 +97,9 @@ bool ReadText(const std::string& path, std::string* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--worker-fd") return WorkerMain(argc, argv);
+  }
   // SIGTERM/SIGINT are taken by a thread of their own (sigwait): block them first, before gRPC
   // or anything else starts a thread, so that every thread inherits the mask.
   sigset_t signals;
@@ -107,6 +143,26 @@ int main(int argc, char** argv) {
       ->envname("RDMESH_CACHE_BYTES")
       ->transform(CLI::AsSizeValue(false))
       ->capture_default_str();
+  app.add_option("--workers", flags.service.max_workers,
+                 "Worker processes that read and mesh models (0 = max-jobs + 2)")
+      ->envname("RDMESH_WORKERS")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--worker-memory", flags.service.worker.memory_bytes,
+                 "Address-space limit of each worker process (0 = none; suffixes like 8GiB work)")
+      ->envname("RDMESH_WORKER_MEMORY")
+      ->transform(CLI::AsSizeValue(false))
+      ->capture_default_str();
+  app.add_option("--worker-cpu-seconds", flags.service.worker.cpu_seconds,
+                 "CPU time one call may use in its worker before it is stopped (0 = no limit)")
+      ->envname("RDMESH_WORKER_CPU_SECONDS")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--spool-dir", flags.service.spool_dir,
+                 "Where uploaded model files are kept for the workers (default: a new "
+                 "temporary directory, removed at exit)")
+      ->envname("RDMESH_SPOOL_DIR")
+      ->check(CLI::ExistingDirectory);
   app.add_option("--log-format", flags.log_format, "Log lines as text or json")
       ->envname("RDMESH_LOG_FORMAT")
       ->check(CLI::IsMember({"text", "json"}))
@@ -176,7 +232,31 @@ int main(int argc, char** argv) {
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
 
+  std::string temporary_spool;
+  if (flags.service.spool_dir.empty()) {
+    const char* tmp = std::getenv("TMPDIR");
+    std::string pattern =
+        std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/rdmeshd-spool-XXXXXX";
+    if (mkdtemp(pattern.data()) == nullptr) {
+      LogLine(spdlog::level::critical, "-", "cannot create a spool directory " + pattern);
+      return 1;
+    }
+    temporary_spool = pattern;
+    flags.service.spool_dir = pattern;
+  }
+  flags.service.worker.executable = SelfPath();
+  flags.service.worker.log_format = flags.log_format;
+  flags.service.worker.log_level = flags.log_level;
+  flags.service.worker.max_model_bytes = flags.service.max_model_bytes;
+  const int max_workers =
+      flags.service.max_workers > 0 ? flags.service.max_workers : flags.service.max_jobs + 2;
+  flags.service.worker.cache_bytes = flags.service.cache_bytes / static_cast<uint64_t>(max_workers);
+
   rdmesh::server::RdmeshService service(flags.service);
+  if (rdmesh::Status started = service.StartWorkers(); !started.ok()) {
+    LogLine(spdlog::level::critical, "-", started.message());
+    return 1;
+  }
   grpc::ServerBuilder builder;
   int port = 0;
   builder.AddListeningPort(flags.listen, credentials, &port);
@@ -193,10 +273,10 @@ int main(int argc, char** argv) {
   const std::string host = flags.listen.substr(0, flags.listen.rfind(':'));
   LogLine(spdlog::level::info, "-",
           fmt::format("rdmeshd {} listening on {}:{} ({}, {}) threads/job {} max-jobs {} "
-                      "max-queue {} data-root {}",
+                      "max-queue {} workers {} data-root {}",
                       RDMESH_VERSION, host, port, flags.tls_cert.empty() ? "plain" : "tls",
                       flags.service.token.empty() ? "no token" : "token", flags.service.threads,
-                      flags.service.max_jobs, flags.service.max_queue,
+                      flags.service.max_jobs, flags.service.max_queue, max_workers,
                       flags.service.data_root.empty() ? "off" : flags.service.data_root));
 
   std::mutex mutex;
@@ -257,6 +337,11 @@ int main(int argc, char** argv) {
   server->Wait();
   stopped = true;
   watchdog.join();
+  service.StopWorkers();
+  if (!temporary_spool.empty()) {
+    std::error_code ignored;
+    std::filesystem::remove_all(temporary_spool, ignored);
+  }
   LogLine(spdlog::level::info, "-", "stopped");
   return 0;
 }

@@ -7,7 +7,6 @@
 
 #include "access.h"
 #include "convert.h"
-#include "mesh_job.h"
 #include "sha256.h"
 #include "status_map.h"
 
@@ -15,7 +14,35 @@ namespace rdmesh::server {
 namespace {
 
 namespace pb = ::rdmesh::v1;
+namespace wire = ::rdmesh::internal;
 using Clock = std::chrono::steady_clock;
+
+/// The call's deadline on the steady clock; none when the client set none.
+std::optional<Clock::time_point> DeadlineOf(const grpc::ServerContext& context) {
+  const auto deadline = context.deadline();
+  if (deadline >= std::chrono::system_clock::time_point::max() - std::chrono::hours(24 * 365)) {
+    return std::nullopt;
+  }
+  return Clock::now() +
+         std::chrono::duration_cast<Clock::duration>(deadline - std::chrono::system_clock::now());
+}
+
+void FillModelFile(const StoredModel& model, wire::ModelFile* out) {
+  out->set_model_id(model.id);
+  out->set_path(model.path);
+  out->set_name(model.name);
+  out->set_format(ToProto(model.format));
+}
+
+/// The model's description for a reply: `cached` = not parsed by this call.
+pb::ModelInfo Describe(const StoredModel& model, bool cached) {
+  pb::ModelInfo info = model.info;
+  info.set_model_id(model.id);
+  info.set_file_bytes(model.file_bytes);
+  info.set_cached(cached);
+  info.set_load_seconds(cached ? 0.0 : model.load_seconds);
+  return info;
+}
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -46,8 +73,11 @@ RdmeshService::RdmeshService(ServiceConfig config)
       resolved_threads_(config_.threads > 0
                             ? config_.threads
                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))),
-      cache_(config_.cache_bytes),
+      index_(config_.spool_dir, config_.cache_bytes),
+      pool_(config_.worker, config_.max_workers > 0 ? config_.max_workers : config_.max_jobs + 2),
       limiter_(config_.max_jobs, config_.max_queue) {}
+
+Status RdmeshService::StartWorkers() { return pool_.Prestart(config_.max_jobs); }
 
 void RdmeshService::BeginShutdown() {
   shutting_down_ = true;
@@ -75,29 +105,67 @@ grpc::Status RdmeshService::Authorize(grpc::ServerContext* context, const Reques
   return Unauthenticated("this server needs an 'authorization: Bearer <token>' header");
 }
 
-pb::ModelInfo RdmeshService::Describe(const CachedModel& entry, bool cached) const {
-  pb::ModelInfo info = ToProto(entry.info);
-  info.set_model_id(entry.id);
-  info.set_file_bytes(entry.file_bytes);
-  info.set_cached(cached);
-  info.set_load_seconds(cached ? 0.0 : entry.load_seconds);
-  return info;
+Result<std::shared_ptr<const StoredModel>> RdmeshService::Accept(
+    grpc::ServerContext* context, const std::string& bytes, const std::string& name,
+    ModelFormat format, const RequestLog& log, bool* cached) {
+  const auto parse = [&](const StoredModel& spooled, bool* refuse) -> Result<pb::ModelInfo> {
+    Status error = Status::Ok();
+    std::unique_ptr<WorkerProcess> worker = pool_.Acquire(
+        spooled.id, [context] { return context->IsCancelled(); }, &error);
+    if (!worker) return error;
+    wire::ToWorker call;
+    call.set_request_id(log.id());
+    FillModelFile(spooled, call.mutable_load()->mutable_model());
+    std::optional<pb::ModelInfo> info;
+    const CallEnd end = CallWorker(
+        worker.get(), pool_.settings(), call, ReaderName(spooled.format),
+        [&info](const wire::FromWorker& reply) {
+          if (reply.has_ready()) info = reply.ready().model();
+          return true;
+        },
+        [context] { return context->IsCancelled(); }, DeadlineOf(*context), log);
+    if (end.worker_ok) {
+      worker->Remember(spooled.id);
+      pool_.Release(std::move(worker));
+    } else {
+      pool_.Discard(std::move(worker));
+    }
+    *refuse = end.crashed && end.phase == "load" && end.status.code() == StatusCode::kParseError;
+    if (!end.status.ok()) return end.status;
+    if (!info) return Status(StatusCode::kInternal, "the worker described no model");
+    if (info->faces() == 0) {
+      return Status(StatusCode::kEmptyModel, "the model '" + name + "' holds no faces");
+    }
+    info->set_name(info->name().empty() ? name : info->name());
+    return *info;
+  };
+  Result<std::shared_ptr<const StoredModel>> entry =
+      index_.GetOrParse(bytes, name, format, parse, cached);
+  if (!entry.ok()) {
+    return Status(entry.status().code(),
+                  "cannot use model '" + name + "': " + entry.status().message());
+  }
+  if (*cached) {
+    log.Info("model {} '{}' already indexed", (*entry)->id.substr(0, 12), name);
+  } else {
+    log.Info("model {} '{}' parsed: {} bytes, {} faces in {:.3f} s", (*entry)->id.substr(0, 12),
+             name, (*entry)->file_bytes, (*entry)->info.faces(), (*entry)->load_seconds);
+  }
+  return entry;
 }
 
-Result<std::shared_ptr<const CachedModel>> RdmeshService::Resolve(const pb::ModelRef& ref,
+Result<std::shared_ptr<const StoredModel>> RdmeshService::Resolve(grpc::ServerContext* context,
+                                                                  const pb::ModelRef& ref,
                                                                   const RequestLog& log,
                                                                   bool* cached) {
   *cached = false;
-  std::string bytes;
-  std::string name;
-  ModelFormat format = ModelFormat::kAuto;
   switch (ref.source_case()) {
     case pb::ModelRef::kModelId: {
       if (!IsSha256Hex(ref.model_id())) {
         return Status(StatusCode::kInvalidArgument,
                       "model_id must be 64 lower-case hex digits (the id UploadModel returned)");
       }
-      std::shared_ptr<const CachedModel> entry = cache_.Find(ref.model_id());
+      std::shared_ptr<const StoredModel> entry = index_.Find(ref.model_id());
       if (!entry) {
         return Status(StatusCode::kNotFound, "model " + ref.model_id() +
                                                  " is not in the cache (never uploaded, or "
@@ -114,10 +182,8 @@ Result<std::shared_ptr<const CachedModel>> RdmeshService::Resolve(const pb::Mode
                           " bytes, more than the server's --max-model-bytes of " +
                           std::to_string(config_.max_model_bytes));
       }
-      bytes = model.data();
-      name = model.name().empty() ? "inline" : model.name();
-      format = FromProto(model.format());
-      break;
+      return Accept(context, model.data(), model.name().empty() ? "inline" : model.name(),
+                    FromProto(model.format()), log, cached);
     }
     case pb::ModelRef::kServerPath: {
       if (config_.data_root.empty()) {
@@ -128,26 +194,13 @@ Result<std::shared_ptr<const CachedModel>> RdmeshService::Resolve(const pb::Mode
       if (!path.ok()) return path.status();
       Result<std::string> content = ReadFileLimited(*path, config_.max_model_bytes);
       if (!content.ok()) return content.status();
-      bytes = std::move(*content);
-      name = ref.server_path();
-      break;
+      return Accept(context, *content, ref.server_path(), ModelFormat::kAuto, log, cached);
     }
     case pb::ModelRef::SOURCE_NOT_SET:
-      return Status(StatusCode::kInvalidArgument,
-                    "the request names no model: set model_id, inline_model or server_path");
+      break;
   }
-  Result<std::shared_ptr<const CachedModel>> entry = cache_.GetOrLoad(bytes, name, format, cached);
-  if (!entry.ok()) {
-    return Status(entry.status().code(),
-                  "cannot use model '" + name + "': " + entry.status().message());
-  }
-  if (*cached) {
-    log.Info("model {} '{}' from the cache", (*entry)->id.substr(0, 12), name);
-  } else {
-    log.Info("model {} '{}' parsed: {} bytes, {} faces in {:.3f} s", (*entry)->id.substr(0, 12),
-             name, (*entry)->file_bytes, (*entry)->info.faces, (*entry)->load_seconds);
-  }
-  return entry;
+  return Status(StatusCode::kInvalidArgument,
+                "the request names no model: set model_id, inline_model or server_path");
 }
 
 grpc::Status RdmeshService::UploadModel(grpc::ServerContext* context,
@@ -196,15 +249,9 @@ grpc::Status RdmeshService::UploadModel(grpc::ServerContext* context,
   }
   if (name.empty()) name = "upload";
   bool cached = false;
-  Result<std::shared_ptr<const CachedModel>> entry = cache_.GetOrLoad(bytes, name, format, &cached);
-  if (!entry.ok()) {
-    return Finish(log,
-                  ToGrpcStatus(Status(entry.status().code(), "cannot use model '" + name +
-                                                                 "': " + entry.status().message())),
-                  start);
-  }
-  log.Info("model {} '{}': {} bytes, {} faces, {}", (*entry)->id.substr(0, 12), name, bytes.size(),
-           (*entry)->info.faces, cached ? "already cached" : "parsed");
+  Result<std::shared_ptr<const StoredModel>> entry =
+      Accept(context, bytes, name, format, log, &cached);
+  if (!entry.ok()) return Finish(log, ToGrpcStatus(entry.status()), start);
   *response = Describe(**entry, cached);
   return Finish(log, grpc::Status::OK, start);
 }
@@ -215,7 +262,7 @@ grpc::Status RdmeshService::GetModelInfo(grpc::ServerContext* context, const pb:
   const RequestLog log = StartRequest(context, "GetModelInfo");
   if (grpc::Status auth = Authorize(context, log); !auth.ok()) return auth;
   bool cached = false;
-  Result<std::shared_ptr<const CachedModel>> entry = Resolve(*request, log, &cached);
+  Result<std::shared_ptr<const StoredModel>> entry = Resolve(context, *request, log, &cached);
   if (!entry.ok()) return Finish(log, ToGrpcStatus(entry.status()), start);
   *response = Describe(**entry, cached);
   return Finish(log, grpc::Status::OK, start);
@@ -247,22 +294,25 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
       options->threads > 0 ? std::min(options->threads, resolved_threads_) : resolved_threads_;
 
   bool cached = false;
-  Result<std::shared_ptr<const CachedModel>> entry = Resolve(request->model(), log, &cached);
+  Result<std::shared_ptr<const StoredModel>> entry =
+      Resolve(context, request->model(), log, &cached);
   if (!entry.ok()) return Finish(log, ToGrpcStatus(entry.status()), start);
-  const CachedModel& model = **entry;
+  const StoredModel& model = **entry;
+  const int faces = model.info.faces();
   for (int id : options->face_ids) {
-    if (id > model.info.faces) {
+    if (id > faces) {
       return Finish(
           log,
           ToGrpcStatus(Status(StatusCode::kInvalidArgument,
                               "face id " + std::to_string(id) + " is out of range: the model " +
-                                  "has faces 1.." + std::to_string(model.info.faces))),
+                                  "has faces 1.." + std::to_string(faces))),
           start);
     }
   }
 
   const Clock::time_point queued = Clock::now();
-  switch (limiter_.Acquire([context] { return context->IsCancelled(); })) {
+  const auto cancelled = [context] { return context->IsCancelled(); };
+  switch (limiter_.Acquire(cancelled)) {
     case JobLimiter::Admission::kAdmitted:
       break;
     case JobLimiter::Admission::kQueueFull:
@@ -285,46 +335,82 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
     ~CountCompleted() { counter->fetch_add(1); }
   } count_completed{&jobs_completed_};
 
-  pb::MeshEvent started_event;
-  pb::Started* started = started_event.mutable_started();
-  started->set_job_id(log.id());
-  *started->mutable_model() = Describe(model, cached);
-  pb::ResolvedOptions* resolved = started->mutable_options();
-  *resolved->mutable_options() = ToProto(*options);
-  resolved->set_max_deviation_abs(options->max_deviation > 0
-                                      ? options->max_deviation
-                                      : options->max_deviation_rel * model.info.diagonal);
-  resolved->set_threads(options->threads);
-  resolved->set_server_max_triangles(config_.max_triangles);
-  started->set_faces_requested(
-      options->face_ids.empty() ? model.info.faces : static_cast<int>(options->face_ids.size()));
-  started->set_queue_seconds(SecondsSince(queued));
-  log.Info("meshing {} faces on {} threads: max_deviation {} (abs {}), rd {}, budget {}",
-           started->faces_requested(), options->threads, options->max_deviation,
-           resolved->max_deviation_abs(), options->rd_tolerance, options->max_triangles);
-  if (!writer->Write(started_event)) {
-    return Finish(log, ToGrpcStatus(Status(StatusCode::kCancelled, "client went away")), start);
+  Status error = Status::Ok();
+  std::unique_ptr<WorkerProcess> worker = pool_.Acquire(model.id, cancelled, &error);
+  if (!worker) return Finish(log, ToGrpcStatus(error), start);
+  const double queue_seconds = SecondsSince(queued);
+
+  wire::ToWorker call;
+  call.set_request_id(log.id());
+  wire::MeshCall* mesh = call.mutable_mesh();
+  FillModelFile(model, mesh->mutable_model());
+  *mesh->mutable_options() = ToProto(*options);
+  *mesh->mutable_return_fields() = request->return_fields();
+  mesh->set_max_triangles(config_.max_triangles);
+  if (const auto deadline = context->deadline();
+      deadline < std::chrono::system_clock::time_point::max() - std::chrono::hours(24 * 365)) {
+    mesh->set_deadline_unix_ms(
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline.time_since_epoch()).count());
+  }
+  mesh->set_elapsed_seconds(SecondsSince(start));
+  std::optional<Clock::time_point> deadline = DeadlineOf(*context);
+  if (options->timeout_seconds > 0) {
+    const Clock::time_point timeout =
+        start + std::chrono::duration_cast<Clock::duration>(
+                    std::chrono::duration<double>(options->timeout_seconds));
+    if (!deadline || timeout < *deadline) deadline = timeout;
   }
 
-  MeshJob::Params params;
-  params.model = *entry;
-  params.options = std::move(*options);
-  params.with_uv = request->return_fields().uv();
-  params.with_normals = request->return_fields().normals();
-  params.with_topology = request->return_fields().node_topology();
-  params.max_triangles = config_.max_triangles;
-  params.deadline = context->deadline();
-  params.start = start;
-  MeshJob job(std::move(params), &log, &active_jobs_);
-  const Status status =
-      job.Run([writer](const pb::MeshEvent& event) { return writer->Write(event); },
-              [context] { return context->IsCancelled(); });
-  if (status.ok()) {
-    log.Info("{} triangles, {} nodes, {} faces ok, {} failed; deviation {:.4g}; {} face messages",
-             job.summary().triangles, job.summary().nodes, job.summary().faces_ok,
-             job.summary().faces_failed, job.summary().estimated_deviation, job.face_messages());
+  int64_t face_messages = 0;
+  std::optional<pb::Summary> summary;
+  active_jobs_.fetch_add(1);
+  const CallEnd end = CallWorker(
+      worker.get(), pool_.settings(), call, ReaderName(model.format),
+      [&](const wire::FromWorker& reply) {
+        if (reply.has_ready()) {
+          pb::MeshEvent started_event;
+          pb::Started* started = started_event.mutable_started();
+          started->set_job_id(log.id());
+          *started->mutable_model() = Describe(model, true);
+          started->mutable_model()->set_cached(reply.ready().model().cached());
+          started->mutable_model()->set_load_seconds(reply.ready().model().load_seconds());
+          pb::ResolvedOptions* resolved = started->mutable_options();
+          *resolved->mutable_options() = ToProto(*options);
+          resolved->set_max_deviation_abs(options->max_deviation > 0
+                                              ? options->max_deviation
+                                              : options->max_deviation_rel * model.info.diagonal());
+          resolved->set_threads(options->threads);
+          resolved->set_server_max_triangles(config_.max_triangles);
+          started->set_faces_requested(
+              options->face_ids.empty() ? faces : static_cast<int>(options->face_ids.size()));
+          started->set_queue_seconds(queue_seconds);
+          log.Info(
+              "meshing {} faces on {} threads in worker {}{}: max_deviation {} (abs {}), rd {}, "
+              "budget {}",
+              started->faces_requested(), options->threads, worker->pid(),
+              reply.ready().model().cached() ? "" : " (parsed the model)", options->max_deviation,
+              resolved->max_deviation_abs(), options->rd_tolerance, options->max_triangles);
+          return writer->Write(started_event);
+        }
+        if (!reply.has_event()) return true;
+        if (reply.event().has_face()) ++face_messages;
+        if (reply.event().has_summary()) summary = reply.event().summary();
+        return writer->Write(reply.event());
+      },
+      cancelled, deadline, log);
+  active_jobs_.fetch_sub(1);
+  if (end.worker_ok) {
+    worker->Remember(model.id);
+    pool_.Release(std::move(worker));
+  } else {
+    pool_.Discard(std::move(worker));
   }
-  return Finish(log, ToGrpcStatus(status), start);
+  if (end.status.ok() && summary) {
+    log.Info("{} triangles, {} nodes, {} faces ok, {} failed; deviation {:.4g}; {} face messages",
+             summary->triangles(), summary->nodes(), summary->faces_ok(), summary->faces_failed(),
+             summary->estimated_deviation(), face_messages);
+  }
+  return Finish(log, ToGrpcStatus(end.status), start);
 }
 
 grpc::Status RdmeshService::GetServerStatus(grpc::ServerContext* context,
@@ -339,9 +425,15 @@ grpc::Status RdmeshService::GetServerStatus(grpc::ServerContext* context,
   response->set_max_jobs(limiter_.max_jobs());
   response->set_max_queue(limiter_.max_queue());
   response->set_threads(resolved_threads_);
-  response->set_cached_models(cache_.size());
-  response->set_cache_bytes(cache_.bytes());
-  response->set_cache_limit_bytes(cache_.limit_bytes());
+  response->set_cached_models(index_.size());
+  response->set_cache_bytes(index_.bytes());
+  response->set_cache_limit_bytes(index_.limit_bytes());
+  response->set_workers(pool_.live());
+  response->set_idle_workers(pool_.idle());
+  response->set_max_workers(pool_.max_workers());
+  response->set_workers_lost(pool_.lost());
+  response->set_refused_models(index_.refused());
+  for (pid_t pid : pool_.pids()) response->add_worker_pids(static_cast<int64_t>(pid));
   response->set_max_model_bytes(config_.max_model_bytes);
   response->set_max_triangles(config_.max_triangles);
   response->set_jobs_completed(jobs_completed_.load());

@@ -10,8 +10,9 @@
 
 #include "job_limiter.h"
 #include "log.h"
-#include "model_cache.h"
+#include "model_index.h"
 #include "rdmesh/v1/rdmesh.grpc.pb.h"
+#include "worker_pool.h"
 
 namespace rdmesh::server {
 
@@ -23,13 +24,19 @@ struct ServiceConfig {
   uint64_t max_model_bytes = 256ull << 20;  ///< largest model file, bytes
   int64_t max_triangles = 50'000'000;       ///< largest result, triangles; 0 = no limit
   uint64_t cache_bytes = 1ull << 30;        ///< model cache size, file bytes
+  std::string spool_dir;                    ///< where uploaded bytes are kept for the workers
+  int max_workers = 0;                      ///< worker processes; 0 = max_jobs + 2
+  WorkerSettings worker;                    ///< limits of each worker process
   std::string token;                        ///< bearer token; empty = no authentication
   std::string data_root;                    ///< root of server-side reads; empty = off
   std::string version = "0.1.0";
 };
 
-/// The rdmesh.v1.Rdmesh service. Handlers run on gRPC's sync-server threads; a Mesh call runs
-/// the engine on a thread of its own and streams from the handler thread. Thread-safe.
+/// The rdmesh.v1.Rdmesh service. Handlers run on gRPC's sync-server threads. Everything that
+/// reads or meshes a model runs in a worker process (WorkerPool): a Mesh call borrows a worker
+/// (preferably one that has parsed the model already), forwards its events to the client, and
+/// returns it; a worker that crashes or passes a limit fails that call only and is replaced.
+/// Thread-safe.
 class RdmeshService final : public ::rdmesh::v1::Rdmesh::Service {
  public:
   explicit RdmeshService(ServiceConfig config);
@@ -52,6 +59,10 @@ class RdmeshService final : public ::rdmesh::v1::Rdmesh::Service {
   int queued_jobs() const { return limiter_.queued(); }
   /// Mesh calls holding or waiting for a job slot (drained before shutdown).
   int busy_jobs() const { return limiter_.running() + limiter_.queued(); }
+  /// Ends the idle workers and starts no more (after the drain).
+  void StopWorkers() { pool_.Close(); }
+  /// Starts the first workers; an error when none can be started.
+  Status StartWorkers();
 
  private:
   /// The request's log, with its id (the client's x-request-id, or a new one), which is also
@@ -60,15 +71,20 @@ class RdmeshService final : public ::rdmesh::v1::Rdmesh::Service {
                           bool quiet = false) const;
   /// UNAUTHENTICATED unless the call carries the bearer token (when one is configured).
   grpc::Status Authorize(grpc::ServerContext* context, const RequestLog& log) const;
-  /// The cached model a ModelRef names, loading inline bytes or a server-side file.
-  Result<std::shared_ptr<const CachedModel>> Resolve(const ::rdmesh::v1::ModelRef& ref,
+  /// The model a ModelRef names, parsing inline bytes or a server-side file on a worker.
+  Result<std::shared_ptr<const StoredModel>> Resolve(grpc::ServerContext* context,
+                                                     const ::rdmesh::v1::ModelRef& ref,
                                                      const RequestLog& log, bool* cached);
-  /// ModelInfo of a cached model.
-  ::rdmesh::v1::ModelInfo Describe(const CachedModel& entry, bool cached) const;
+  /// Indexes the model these bytes hold, parsing them on a worker unless already indexed.
+  Result<std::shared_ptr<const StoredModel>> Accept(grpc::ServerContext* context,
+                                                    const std::string& bytes,
+                                                    const std::string& name, ModelFormat format,
+                                                    const RequestLog& log, bool* cached);
 
   const ServiceConfig config_;
   const int resolved_threads_;
-  ModelCache cache_;
+  ModelIndex index_;
+  WorkerPool pool_;
   JobLimiter limiter_;
   std::atomic<int> active_jobs_{0};
   std::atomic<int64_t> jobs_completed_{0};

@@ -90,11 +90,28 @@ class Daemon:
     def alive(self):
         return self.proc.poll() is None
 
+    def worker_pids(self):
+        """Process ids of the daemon's worker processes (its children)."""
+        pids = []
+        for task in pathlib.Path("/proc/%d/task" % self.proc.pid).iterdir():
+            try:
+                pids += [int(p) for p in (task / "children").read_text().split()]
+            except OSError:
+                pass
+        return pids
+
     def cpu_seconds(self):
-        """User + system CPU time of the whole process (all threads), seconds."""
-        fields = pathlib.Path("/proc/%d/stat" % self.proc.pid).read_text().rsplit(")", 1)[1]
-        values = fields.split()
-        return (int(values[11]) + int(values[12])) / CLK_TCK  # utime, stime
+        """User + system CPU time of the daemon and its live worker processes (all threads),
+        seconds."""
+        total = 0.0
+        for pid in [self.proc.pid] + self.worker_pids():
+            try:
+                fields = pathlib.Path("/proc/%d/stat" % pid).read_text().rsplit(")", 1)[1]
+            except OSError:
+                continue  # a worker that just ended
+            values = fields.split()
+            total += (int(values[11]) + int(values[12])) / CLK_TCK  # utime, stime
+        return total
 
     def stop(self, sig=signal.SIGTERM, timeout=20.0):
         """Sends `sig` and returns the exit code."""

@@ -1,0 +1,212 @@
+#include "worker.h"
+
+#include <sys/prctl.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <new>
+#include <string>
+#include <thread>
+#include <utility>
+
+#include "access.h"
+#include "convert.h"
+#include "frame.h"
+#include "log.h"
+#include "mesh_job.h"
+#include "model_cache.h"
+#include "rdmesh/internal/worker.pb.h"
+
+namespace rdmesh::server {
+namespace {
+
+namespace pb = ::rdmesh::v1;
+namespace wire = ::rdmesh::internal;
+
+/// Calls from the daemon, read by a thread of their own so that Cancel reaches a running call.
+class Inbox {
+ public:
+  explicit Inbox(int fd) : fd_(fd), reader_([this] { Read(); }) {}
+  ~Inbox() { reader_.detach(); }
+
+  /// The next call; false once the daemon has gone.
+  bool Next(wire::ToWorker* call) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    ready_.wait(lock, [&] { return !calls_.empty() || closed_; });
+    if (calls_.empty()) return false;
+    *call = std::move(calls_.front());
+    calls_.pop_front();
+    cancelled_ = false;
+    return true;
+  }
+
+  /// True once the daemon asked to stop the current call (or went away).
+  bool cancelled() const { return cancelled_.load(); }
+
+ private:
+  void Read() {
+    wire::ToWorker call;
+    while (ReadFrame(fd_, &call, -1) == FrameRead::kMessage) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (call.has_cancel()) {
+        cancelled_ = true;
+      } else {
+        calls_.push_back(std::move(call));
+        ready_.notify_one();
+      }
+    }
+    // The daemon is gone (or spoke garbage): nobody waits for this process any more.
+    std::_Exit(0);
+  }
+
+  const int fd_;
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  std::deque<wire::ToWorker> calls_;
+  bool closed_ = false;
+  std::atomic<bool> cancelled_{false};
+  std::thread reader_;
+};
+
+pb::ModelInfo Describe(const CachedModel& entry, bool cached) {
+  pb::ModelInfo info = ToProto(entry.info);
+  info.set_model_id(entry.id);
+  info.set_file_bytes(entry.file_bytes);
+  info.set_cached(cached);
+  info.set_load_seconds(cached ? 0.0 : entry.load_seconds);
+  return info;
+}
+
+Status OutOfMemory(const char* what) {
+  return Status(StatusCode::kResourceExhausted,
+                std::string("the worker ran out of memory (--worker-memory) while ") + what);
+}
+
+class Worker {
+ public:
+  explicit Worker(const WorkerConfig& config)
+      : config_(config), cache_(config.cache_bytes), inbox_(config.fd) {}
+
+  int Run() {
+    wire::ToWorker call;
+    while (inbox_.Next(&call)) {
+      const RequestLog log(call.request_id().empty() ? "-" : call.request_id());
+      std::string phase = "load";
+      Status status = Status::Ok();
+      try {
+        status = Serve(call, log, &phase);
+      } catch (const std::bad_alloc&) {
+        status = OutOfMemory(phase == "load" ? "reading the model" : "meshing the model");
+      } catch (const std::exception& e) {
+        status = Status(StatusCode::kInternal, std::string("exception: ") + e.what());
+      } catch (...) {
+        status = Status(StatusCode::kInternal, "unknown exception");
+      }
+      wire::FromWorker reply;
+      wire::Done* done = reply.mutable_done();
+      done->set_code(static_cast<int>(status.code()));
+      done->set_message(status.message());
+      done->set_phase(phase);
+      if (!WriteFrame(config_.fd, reply)) return 0;
+    }
+    return 0;
+  }
+
+ private:
+  Result<std::shared_ptr<const CachedModel>> Load(const wire::ModelFile& file, bool* cached) {
+    *cached = false;
+    if (std::shared_ptr<const CachedModel> held = cache_.Find(file.model_id())) {
+      *cached = true;
+      return held;
+    }
+    Result<std::string> bytes = ReadFileLimited(file.path(), config_.max_model_bytes);
+    if (!bytes.ok()) {
+      return Status(StatusCode::kNotFound,
+                    "the model's bytes are gone from the server's spool (evicted): upload it "
+                    "again");
+    }
+    Result<std::shared_ptr<const CachedModel>> entry =
+        cache_.GetOrLoad(*bytes, file.name(), FromProto(file.format()), cached);
+    if (entry.ok() && (*entry)->id != file.model_id()) {
+      return Status(StatusCode::kInternal,
+                    "the spooled bytes of model " + file.model_id() + " do not match their id");
+    }
+    return entry;
+  }
+
+  Status Ready(const CachedModel& entry, bool cached) {
+    wire::FromWorker reply;
+    *reply.mutable_ready()->mutable_model() = Describe(entry, cached);
+    if (!WriteFrame(config_.fd, reply)) return Status(StatusCode::kCancelled, "daemon gone");
+    return Status::Ok();
+  }
+
+  Status Serve(const wire::ToWorker& call, const RequestLog& log, std::string* phase) {
+    const wire::ModelFile& file = call.has_load() ? call.load().model() : call.mesh().model();
+    bool cached = false;
+    Result<std::shared_ptr<const CachedModel>> entry = Load(file, &cached);
+    if (!entry.ok()) return entry.status();
+    if (!cached) {
+      log.Info("worker {}: model {} '{}' parsed in {:.3f} s", getpid(), (*entry)->id.substr(0, 12),
+               file.name(), (*entry)->load_seconds);
+    }
+    if (Status ready = Ready(**entry, cached); !ready.ok()) return ready;
+    if (call.has_load()) return Status::Ok();
+
+    *phase = "mesh";
+    const wire::MeshCall& mesh = call.mesh();
+    Result<MeshOptions> options = FromProto(mesh.options());
+    if (!options.ok()) return options.status();
+    MeshJob::Params params;
+    params.model = *entry;
+    params.options = std::move(*options);
+    params.with_uv = mesh.return_fields().uv();
+    params.with_normals = mesh.return_fields().normals();
+    params.with_topology = mesh.return_fields().node_topology();
+    params.max_triangles = mesh.max_triangles();
+    if (mesh.deadline_unix_ms() > 0) {
+      params.deadline =
+          std::chrono::system_clock::time_point(std::chrono::milliseconds(mesh.deadline_unix_ms()));
+    }
+    params.start = std::chrono::steady_clock::now() -
+                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                       std::chrono::duration<double>(mesh.elapsed_seconds()));
+    std::atomic<int> active{0};
+    MeshJob job(std::move(params), &log, &active);
+    const int fd = config_.fd;
+    return job.Run(
+        [fd](const pb::MeshEvent& event) {
+          wire::FromWorker reply;
+          *reply.mutable_event() = event;
+          return WriteFrame(fd, reply);
+        },
+        [this] { return inbox_.cancelled(); });
+  }
+
+  const WorkerConfig config_;
+  ModelCache cache_;
+  Inbox inbox_;
+};
+
+}  // namespace
+
+int RunWorker(const WorkerConfig& config) {
+  // Die with the daemon (a daemon that is already gone closes the socket, which ends the
+  // inbox).
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (config.memory_bytes > 0) {
+    rlimit limit{config.memory_bytes, config.memory_bytes};
+    setrlimit(RLIMIT_AS, &limit);
+  }
+  Worker worker(config);
+  return worker.Run();
+}
+
+}  // namespace rdmesh::server

@@ -1,0 +1,23 @@
+#pragma once
+// The worker process: the side of rdmeshd that runs OCCT on untrusted model bytes. The daemon
+// starts it as `rdmeshd --worker-fd N ...` and talks to it over that socket
+// (proto/rdmesh/internal/worker.proto). A crash, a hang or an out-of-memory in the worker costs
+// the daemon one call and one process, never the service.
+
+#include <cstdint>
+
+namespace rdmesh::server {
+
+struct WorkerConfig {
+  int fd = -1;                ///< the socket to the daemon
+  uint64_t cache_bytes = 0;   ///< parsed models kept, counted in model file bytes
+  uint64_t memory_bytes = 0;  ///< RLIMIT_AS of this process; 0 = none
+  uint64_t max_model_bytes = 256ull << 20;
+};
+
+/// Serves calls from the daemon, one at a time, until the socket closes. Parsed models stay in
+/// the worker (a bounded LRU cache), so that meshing the same model again does not parse it again.
+/// Also ends when the daemon dies (PR_SET_PDEATHSIG). Returns the process exit code.
+int RunWorker(const WorkerConfig& config);
+
+}  // namespace rdmesh::server
