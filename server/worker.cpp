@@ -9,7 +9,9 @@
 #include <condition_variable>
 #include <csignal>
 #include <deque>
+#include <cstdlib>
 #include <exception>
+#include <fstream>
 #include <mutex>
 #include <new>
 #include <string>
@@ -84,9 +86,21 @@ pb::ModelInfo Describe(const CachedModel& entry, bool cached) {
   return info;
 }
 
-Status OutOfMemory(const char* what) {
+/// The process's peak address-space size (VmPeak), bytes; 0 when unknown.
+uint64_t PeakAddressSpace() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmPeak:", 0) == 0) return std::strtoull(line.c_str() + 7, nullptr, 10) << 10;
+  }
+  return 0;
+}
+
+Status OutOfMemory(uint64_t limit, const std::string& phase) {
   return Status(StatusCode::kResourceExhausted,
-                std::string("the worker ran out of memory (--worker-memory) while ") + what);
+                "the worker reached its memory limit of " + std::to_string(limit >> 20) +
+                    " MiB (--worker-memory) while " +
+                    (phase == "load" ? "reading the model" : "meshing the model"));
 }
 
 class Worker {
@@ -103,18 +117,25 @@ class Worker {
       try {
         status = Serve(call, log, &phase);
       } catch (const std::bad_alloc&) {
-        status = OutOfMemory(phase == "load" ? "reading the model" : "meshing the model");
+        status = OutOfMemory(config_.memory_bytes, phase);
       } catch (const std::exception& e) {
         status = Status(StatusCode::kInternal, std::string("exception: ") + e.what());
       } catch (...) {
         status = Status(StatusCode::kInternal, "unknown exception");
       }
+      // An allocation or a thread that failed under the address-space limit surfaces as some
+      // engine error; when the process came near its limit, that is what it was. Such a worker
+      // ends after answering (its state may be damaged); the daemon starts another.
+      const bool out_of_memory =
+          !status.ok() && config_.memory_bytes > 0 &&
+          PeakAddressSpace() >= config_.memory_bytes / 10 * 9;
+      if (out_of_memory) status = OutOfMemory(config_.memory_bytes, phase);
       wire::FromWorker reply;
       wire::Done* done = reply.mutable_done();
       done->set_code(static_cast<int>(status.code()));
       done->set_message(status.message());
       done->set_phase(phase);
-      if (!WriteFrame(config_.fd, reply)) return 0;
+      if (!WriteFrame(config_.fd, reply) || out_of_memory) return 0;
     }
     return 0;
   }

@@ -9,7 +9,7 @@ import time
 import grpc
 import pytest
 
-from conftest import CUBE, CYLINDER, wait_until
+from conftest import CUBE, CYLINDER, NIST, wait_until
 from rdmesh import RdmeshError
 
 
@@ -192,3 +192,18 @@ def test_workers_are_limited_and_counted(start_daemon):
     assert status.max_workers == 2
     assert 1 <= status.workers <= 2
     assert sorted(status.worker_pids) == sorted(daemon.worker_pids())
+
+
+def test_memory_limit_fails_the_call_not_the_daemon(start_daemon):
+    # 130 MiB of address space is about 20 MiB more than an idle worker maps: the parse or the
+    # mesh of a 10-face model at 1e-4 passes it. Under memory pressure glibc's malloc can also
+    # crawl instead of failing, which the CPU limit then ends: either way RESOURCE_EXHAUSTED.
+    daemon = start_daemon("--worker-memory", "130MiB", "--worker-cpu-seconds", "10")
+    client = daemon.client()
+    with pytest.raises(RdmeshError) as error:
+        client.mesh(NIST, max_deviation_rel=1e-4, timeout=60)
+    assert error.value.code == grpc.StatusCode.RESOURCE_EXHAUSTED
+    assert ("memory limit of 130 MiB (--worker-memory)" in error.value.details or
+            "CPU time limit of 10 s" in error.value.details)
+    assert daemon.alive()
+    assert client.health() == "SERVING"
