@@ -47,7 +47,8 @@ def mutants(seed_text, rng):
     """Hostile variants of a STEP text, as (name, bytes)."""
     lines = seed_text.splitlines(keepends=True)
     oriented = [i for i, line in enumerate(lines) if "=ORIENTED_EDGE(" in line]
-    loops = [i for i, line in enumerate(lines) if "=EDGE_LOOP(" in line]
+    loops = [i for i, line in enumerate(lines)
+             if "=EDGE_LOOP(" in line and 0 <= line.rfind("(") < line.find(")")]
     out = []
     if oriented:
         i = rng.choice(oriented)
@@ -56,7 +57,7 @@ def mutants(seed_text, rng):
         out.append(("selfref", "".join(lines[:i] + [fixed] + lines[i + 1:])))
     if loops:
         i = rng.choice(loops)
-        inner = lines[i][lines[i].index("((") + 2:lines[i].rindex("))")]
+        inner = lines[i][lines[i].rindex("(") + 1:lines[i].index(")")]
         repeated = lines[i].replace(inner, ",".join([inner] * 40))
         out.append(("loop40", "".join(lines[:i] + [repeated] + lines[i + 1:])))
     cut = rng.randrange(len(seed_text) // 4, len(seed_text))
@@ -119,6 +120,7 @@ def main():
 
     lock = threading.Lock()
     outcomes = collections.Counter()
+    messages = collections.Counter()
     hashes = {}
     mismatches = []
     done = [0]
@@ -151,6 +153,9 @@ def main():
                 outcome = error.code.name if error.code else "UNKNOWN"
                 if key is not None:
                     outcome += " (well-formed %s)" % name
+                detail = re.sub(r"'[^']*'", "'...'", str(error.details))
+                with lock:
+                    messages[(outcome, re.sub(r"[0-9.]+ s\b", "N s", detail))] += 1
             except grpc.RpcError as error:
                 outcome = "RPC " + error.code().name
             with lock:
@@ -189,7 +194,9 @@ def main():
     status = Client(address).server_status()
     alive = proc is None or proc.poll() is None
     report = {"minutes": args.minutes, "clients": args.clients, "requests": done[0],
-              "outcomes": dict(outcomes), "mismatches": mismatches, "samples": samples,
+              "outcomes": dict(outcomes),
+              "messages": ["%d x %s: %s" % (n, o, m) for (o, m), n in messages.most_common()],
+              "mismatches": mismatches, "samples": samples,
               "daemon_alive": alive, "workers_lost": status.workers_lost,
               "refused_models": status.refused_models, "jobs_completed": status.jobs_completed}
     if daemon_pid and len(samples) >= 2 and samples[0]["daemon_rss_mib"]:

@@ -1,6 +1,5 @@
 #include "worker.h"
 
-#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -8,8 +7,8 @@
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
-#include <deque>
 #include <cstdlib>
+#include <deque>
 #include <exception>
 #include <fstream>
 #include <mutex>
@@ -126,9 +125,8 @@ class Worker {
       // An allocation or a thread that failed under the address-space limit surfaces as some
       // engine error; when the process came near its limit, that is what it was. Such a worker
       // ends after answering (its state may be damaged); the daemon starts another.
-      const bool out_of_memory =
-          !status.ok() && config_.memory_bytes > 0 &&
-          PeakAddressSpace() >= config_.memory_bytes / 10 * 9;
+      const bool out_of_memory = !status.ok() && config_.memory_bytes > 0 &&
+                                 PeakAddressSpace() >= config_.memory_bytes / 10 * 9;
       if (out_of_memory) status = OutOfMemory(config_.memory_bytes, phase);
       wire::FromWorker reply;
       wire::Done* done = reply.mutable_done();
@@ -219,9 +217,9 @@ class Worker {
 }  // namespace
 
 int RunWorker(const WorkerConfig& config) {
-  // Die with the daemon (a daemon that is already gone closes the socket, which ends the
-  // inbox).
-  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  // No PR_SET_PDEATHSIG: it fires when the daemon *thread* that started this process ends
+  // (gRPC's handler threads come and go). The inbox's reader ends the process instead, as soon
+  // as the daemon's end of the socket closes, whatever the main thread is doing.
   if (config.memory_bytes > 0) {
     rlimit limit{config.memory_bytes, config.memory_bytes};
     setrlimit(RLIMIT_AS, &limit);

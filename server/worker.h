@@ -17,7 +17,8 @@ struct WorkerConfig {
 
 /// Serves calls from the daemon, one at a time, until the socket closes. Parsed models stay in
 /// the worker (a bounded LRU cache), so that meshing the same model again does not parse it again.
-/// Also ends when the daemon dies (PR_SET_PDEATHSIG). Returns the process exit code.
+/// Also ends, at once, when the daemon dies (its end of the socket closes). Returns the process
+/// exit code.
 int RunWorker(const WorkerConfig& config);
 
 }  // namespace rdmesh::server
