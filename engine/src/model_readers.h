@@ -12,10 +12,6 @@
 
 namespace rdmesh {
 
-/// The format named by a path's extension (.step/.stp, .iges/.igs, .brep/.brp, any case), or
-/// kAuto when the extension is none of these.
-ModelFormat FormatFromExtension(const std::string& path);
-
 /// The format recognised from a file's first bytes, or kAuto when none matches: STEP starts with
 /// "ISO-10303-21", BREP holds "CASCADE Topology" near its start, IGES has 80-column lines with
 /// 'S' in column 73.
