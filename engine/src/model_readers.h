@@ -35,4 +35,9 @@ Result<ReadShape> ReadModelBytes(const std::string& bytes, ModelFormat format,
                                  const std::string& path, const std::string& name,
                                  const Context* context);
 
+/// The checks ReadModelBytes makes on STEP bytes before OCCT transfers them: the text scan of
+/// step_precheck.h, then OCCT's parser and its complaints about references. Parses, does not
+/// transfer. Ok, or the kParseError ReadModelBytes would return. For tests over many files.
+Status CheckStepBytes(const std::string& bytes, const std::string& name);
+
 }  // namespace rdmesh

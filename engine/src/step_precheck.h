@@ -1,0 +1,22 @@
+#pragma once
+// A scan of STEP text for what is known to crash OCCT 7.6's STEP reader outright: faults that
+// OCC_CATCH_SIGNALS cannot turn into exceptions because they exhaust the stack. Internal to the
+// engine (model_readers.cpp); a file that passes may still fail to read, cleanly.
+
+#include <string>
+
+namespace rdmesh {
+
+/// Parentheses nested deeper than this are refused. StepData's parser recurses once per level
+/// (StepData_UndefinedEntity::ReadRecord): 70000 levels overflow an 8 MiB stack, and smaller
+/// thread stacks or sanitizer builds overflow sooner. Real files nest a few levels.
+constexpr int kMaxStepNesting = 1000;
+
+/// Why OCCT's STEP reader would crash on `bytes`, or "" when no known cause is present:
+/// - parentheses nested deeper than kMaxStepNesting (outside strings and comments);
+/// - an ORIENTED_EDGE whose edge_element is itself, or leads back to it through other
+///   ORIENTED_EDGEs (StepShape_OrientedEdge::EdgeStart recurses along that chain for ever).
+/// Reads the text once; no OCCT call.
+std::string StepCrashReason(const std::string& bytes);
+
+}  // namespace rdmesh
