@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -18,6 +19,7 @@ namespace {
 
 // The write end of the phase pipe in the child; -1 elsewhere.
 int g_phase_fd = -1;
+std::atomic<Phase> g_phase{Phase::kLoading};
 
 // The child's pid in the parent while it runs, and how many signals were passed on to it.
 volatile sig_atomic_t g_child = 0;
@@ -56,11 +58,14 @@ Phase FollowPhases(int fd) {
 }  // namespace
 
 void EnterPhase(Phase phase) {
+  g_phase.store(phase);
   if (g_phase_fd < 0) return;
   char byte = static_cast<char>(phase);
   ssize_t written = write(g_phase_fd, &byte, 1);
   (void)written;  // a parent that went away cannot be told
 }
+
+Phase CurrentPhase() { return g_phase.load(); }
 
 int RunIsolated(const std::function<int()>& run,
                 const std::function<int(const ChildDeath&)>& on_death) {

@@ -17,9 +17,12 @@ enum class Phase : char {
   kWriting = 'W',
 };
 
-/// Tells the parent process that the run has entered `phase`; does nothing when not isolated.
-/// Async-signal-safe (one write(2) of one byte).
+/// Records that the run has entered `phase` and tells the parent process, when isolated.
+/// Async-signal-safe (an atomic store and one write(2) of one byte).
 void EnterPhase(Phase phase);
+
+/// The phase last entered (kLoading before any); any thread may ask.
+Phase CurrentPhase();
 
 /// How the child died.
 struct ChildDeath {

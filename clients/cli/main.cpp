@@ -54,7 +54,11 @@ int Fail(const CommonFlags& flags, int code, const Status& status) {
     nlohmann::ordered_json error = {
         {"error", {{"code", StatusCodeName(status.code())}, {"message", status.message()}}},
         {"exit_code", code}};
-    std::cout << error.dump() << std::endl;
+    // Through C stdio: while OCCT reads, std::cout is muted (model_readers.cpp), and the watchdog
+    // may fail the run then.
+    std::string line = error.dump() + "\n";
+    std::fputs(line.c_str(), stdout);
+    std::fflush(stdout);
   }
   return code;
 }
@@ -128,10 +132,11 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   // The engine stops itself at the deadline; should a stage miss it, end the process anyway.
   Watchdog watchdog(options->timeout_seconds > 0 ? options->timeout_seconds + kWatchdogGrace : 0,
                     [&flags, &options] {
+                      const char* doing =
+                          CurrentPhase() == Phase::kLoading ? "loading '" : "meshing '";
                       Fail(flags, kExitStopped,
                            StopMessage(Status(StatusCode::kDeadlineExceeded, ""),
-                                       options->timeout_seconds, "meshing '" + flags.model + "'"));
-                      std::fflush(stdout);
+                                       options->timeout_seconds, doing + flags.model + "'"));
                       std::_Exit(kExitStopped);
                     });
   RunInfo run;
