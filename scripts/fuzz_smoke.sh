@@ -4,6 +4,8 @@
 # seed from the tests/data models. Exits non-zero when the fuzzer finds a crash, a leak, a hang
 # (-timeout) or runs out of memory; the input is left in build-fuzz/artifacts/.
 #   scripts/fuzz_smoke.sh [RUNS] [MAX_SECONDS]      defaults: 600 runs, at most 90 s
+# RDMESH_FUZZ_ARGS adds libFuzzer flags (bench/fuzz_long.sh uses it); RDMESH_FUZZ_BUILD_DIR moves
+# the build.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 build="${RDMESH_FUZZ_BUILD_DIR:-$top/build-fuzz}"
@@ -15,16 +17,21 @@ cmake -S "$top" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_COMPIL
   -DRDMESH_BUILD_SERVER=OFF -DRDMESH_BUILD_BENCH=OFF >/dev/null
 ninja -C "$build" -j2 step_fuzzer
 
-# The seeds: the bundled models and the regression cases that end quickly (not the hangs).
+# The seeds: the bundled models, the regression cases that end quickly (not the hangs), and the
+# corpus models (../shared/corpus, when present) no longer than -max_len.
+max_len=65536
 work="$build/fuzz_work"
 rm -rf "$work"
 mkdir -p "$work/corpus" "$work/seeds" "$build/artifacts"
 cp "$top"/tests/data/*.step "$top"/tests/data/*.stp "$work/seeds/"
 cp "$top"/tests/data/fuzz/crash_*.step "$work/seeds/" 2>/dev/null || true
+if [ -d "$top/../shared/corpus" ]; then
+  find "$top/../shared/corpus" -name '*.st*p' -size -"$((max_len + 1))"c -exec cp {} "$work/seeds/" \;
+fi
 
 export LSAN_OPTIONS="suppressions=$top/fuzz/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 start=$(date +%s)
-"$build/bin/step_fuzzer" -seed=1 -runs="$runs" -max_total_time="$seconds" -max_len=65536 \
+"$build/bin/step_fuzzer" -seed=1 -runs="$runs" -max_total_time="$seconds" -max_len="$max_len" \
   -timeout=30 -rss_limit_mb=4096 -print_final_stats=1 -dict="$top/fuzz/step.dict" \
-  -artifact_prefix="$build/artifacts/" "$work/corpus" "$work/seeds"
-echo "fuzz_smoke: no crash in $(($(date +%s) - start)) s (at most $runs runs, seed 1)"
+  -artifact_prefix="$build/artifacts/" ${RDMESH_FUZZ_ARGS:-} "$work/corpus" "$work/seeds"
+echo "fuzz_smoke: done in $(($(date +%s) - start)) s (at most $runs runs, seed 1)"
