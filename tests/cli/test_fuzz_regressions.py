@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-TIMEOUT = 2  # --timeout for every case; the hang cases end at most 2 s later (the watchdog)
+TIMEOUT = 2  # --timeout for every case; the slow and hanging ones end 2 s later (the watchdog)
 
 
 def documented_cases(data_dir):
