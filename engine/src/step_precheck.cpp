@@ -78,13 +78,19 @@ std::string StepCrashReason(const std::string& bytes) {
     } else if (c == '(') {
       if (++depth > kMaxStepNesting)
         return "parentheses nested more than " + std::to_string(kMaxStepNesting) + " deep";
-      if (depth == 1) argument = 0, argument_start = i + 1;
+      if (depth == 1) {
+        argument = 0;
+        argument_start = i + 1;
+      }
     } else if (c == ',' || c == ')') {
       if (depth == 1 && oriented_edge >= 0 && argument == 3) {
         long target = Reference(text.substr(argument_start, i - argument_start));
         if (target >= 0) edge_element[oriented_edge] = target;
       }
-      if (c == ',' && depth == 1) argument++, argument_start = i + 1;
+      if (c == ',' && depth == 1) {
+        ++argument;
+        argument_start = i + 1;
+      }
       if (c == ')' && depth > 0 && --depth == 0) oriented_edge = -1;
     } else if (c == ';') {
       depth = 0;
