@@ -264,7 +264,18 @@ class Daemon:
     def stop(self):
         if self.process is not None and self.process.poll() is None:
             self.process.terminate()
-            self.process.wait(timeout=30)
+            try:
+                self.process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+
+    def restart_if_ours(self):
+        """After a hang: a daemon this script runs is stopped and started afresh (a stuck reader
+        holds OCCT's reader lock for good, so every later request would wait too)."""
+        if self.process is not None:
+            self.stop()
+            self.start()
 
 
 def run_daemon(daemon, path, timeout):
@@ -280,6 +291,7 @@ def run_daemon(daemon, path, timeout):
         outcome = error.code.name if error.code else "UNKNOWN"
         if outcome == "DEADLINE_EXCEEDED" and time.monotonic() - start >= timeout + HANG_GRACE:
             outcome = "hang"
+            daemon.restart_if_ours()
     seconds = time.monotonic() - start
     death = daemon.died()
     if death:
