@@ -336,7 +336,7 @@ Status CheckReferences(XSControl_Reader& reader, const FatalChecks& fatal,
 // Parses the bytes into `reader`, with the checks that refuse a file before the transfer.
 Status ParseStep(const std::string& bytes, const std::string& name, XSControl_Reader& reader) {
   std::string crash = StepCrashReason(bytes);
-  if (!crash.empty()) return ParseError(name, crash + " (OCCT's reader would crash on it)");
+  if (!crash.empty()) return ParseError(name, crash + " (OCCT's reader would crash or hang on it)");
   MemoryStreamBuffer buffer(bytes);
   std::istream stream(&buffer);
   if (reader.ReadStream(name.c_str(), stream) != IFSelect_RetDone)

@@ -1,6 +1,8 @@
 #include "step_precheck.h"
 
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <string_view>
 #include <unordered_map>
 
@@ -75,6 +77,21 @@ std::string StepCrashReason(const std::string& bytes) {
       i = text.find("*/", i + 2);
       if (i == std::string_view::npos) break;
       ++i;
+    } else if ((c == 'E' || c == 'e') && depth > 0 && i > 0 &&
+               (IsDigit(text[i - 1]) || text[i - 1] == '.')) {  // the exponent of a real
+      size_t start = i;
+      while (start > 0 && (IsDigit(text[start - 1]) || text[start - 1] == '.' ||
+                           text[start - 1] == '-' || text[start - 1] == '+'))
+        --start;
+      size_t digits =
+          i + 1 < text.size() && (text[i + 1] == '+' || text[i + 1] == '-') ? i + 2 : i + 1;
+      size_t end = Skip(text, digits, IsDigit);
+      if (end - digits >= 3) {  // only a three-digit exponent can overflow
+        std::string number(text.substr(start, end - start));
+        if (std::isinf(std::strtod(number.c_str(), nullptr)))
+          return "the number " + number + " is beyond the range of a double";
+      }
+      i = end - 1;
     } else if (c == '(') {
       if (++depth > kMaxStepNesting)
         return "parentheses nested more than " + std::to_string(kMaxStepNesting) + " deep";

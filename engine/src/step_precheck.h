@@ -1,5 +1,5 @@
 #pragma once
-// A scan of STEP text for what is known to crash OCCT 7.6's STEP reader outright: faults that
+// A scan of STEP text for what is known to crash or hang OCCT 7.6's STEP reader: faults that
 // OCC_CATCH_SIGNALS cannot turn into exceptions because they exhaust the stack. Internal to the
 // engine (model_readers.cpp); a file that passes may still fail to read, cleanly.
 
@@ -15,7 +15,10 @@ constexpr int kMaxStepNesting = 1000;
 /// Why OCCT's STEP reader would crash on `bytes`, or "" when no known cause is present:
 /// - parentheses nested deeper than kMaxStepNesting (outside strings and comments);
 /// - an ORIENTED_EDGE whose edge_element is itself, or leads back to it through other
-///   ORIENTED_EDGEs (StepShape_OrientedEdge::EdgeStart recurses along that chain for ever).
+///   ORIENTED_EDGEs (StepShape_OrientedEdge::EdgeStart recurses along that chain for ever);
+/// - a real number beyond the range of a double (1.E+999): an infinite coordinate makes
+///   ShapeFix_Edge::FixAddPCurve dereference a null curve in GeomProjLib::ProjectOnPlane, or
+///   search for ever in Extrema_GenExtPS (tests/data/fuzz).
 /// Reads the text once; no OCCT call.
 std::string StepCrashReason(const std::string& bytes);
 

@@ -72,6 +72,24 @@ TEST(StepPrecheckTest, RefusesAbsurdNesting) {
   EXPECT_EQ(StepCrashReason(nested(3, "/*" + many + "*/ 1")), "");
 }
 
+TEST(StepPrecheckTest, RefusesInfiniteNumbers) {
+  const std::string point = "#190=CARTESIAN_POINT('',(0.,-10.,0.));";
+  auto with_x = [&point](const std::string& x) {
+    return SlicedCylinder(point, "#190=CARTESIAN_POINT('" + x + "',(" + x + ",-10.,0.));");
+  };
+  EXPECT_EQ(StepCrashReason(with_x("1.E+300")), "");
+  EXPECT_EQ(StepCrashReason(with_x("-1.5E-320")), "");  // underflows to a subnormal: harmless
+  EXPECT_EQ(StepCrashReason(with_x("0.")), "");
+  EXPECT_NE(StepCrashReason(with_x("1.E+999")).find("the number 1.E+999 is beyond the range"),
+            std::string::npos);
+  EXPECT_NE(StepCrashReason(with_x("-2.5e309")).find("-2.5e309"), std::string::npos);
+  // Only numbers count: not names, strings or keywords.
+  EXPECT_EQ(StepCrashReason(SlicedCylinder(point, "#190=CARTESIAN_POINT('1.E+999',(0.,-10.,0.));")),
+            "");
+  EXPECT_EQ(StepCrashReason(SlicedCylinder(point, "#190=CARTESIAN_POINT('',(0.,-10.,0.)),E999;")),
+            "");
+}
+
 // The CAx-IF case: a shape representation listing an item of a type OCCT 7.6 does not know.
 // The parser complains ("Entity has illegal type"), and the transfer is fine.
 TEST(StepPrecheckTest, UnknownItemTypeIsAccepted) {
