@@ -1,7 +1,8 @@
 #pragma once
 // A scan of STEP text for what is known to crash or hang OCCT 7.6's STEP reader: faults that
-// OCC_CATCH_SIGNALS cannot turn into exceptions because they exhaust the stack. Internal to the
-// engine (model_readers.cpp); a file that passes may still fail to read, cleanly.
+// OCC_CATCH_SIGNALS does not turn into exceptions (stack overflows, a null dereference inside
+// ShapeFix) and searches that never end. Internal to the engine (model_readers.cpp); a file that
+// passes may still fail to read, cleanly.
 
 #include <string>
 
