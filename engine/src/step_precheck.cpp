@@ -65,6 +65,7 @@ std::string StepCrashReason(const std::string& bytes) {
   // edge_element of each ORIENTED_EDGE('name', *, *, #edge, .T.), by entity id.
   std::unordered_map<long, long> edge_element;
   long oriented_edge = -1;  // the ORIENTED_EDGE whose arguments are being read
+  bool in_point = false;    // reading the arguments of a CARTESIAN_POINT
   int argument = 0;
   size_t argument_start = 0;
   int depth = 0;
@@ -77,7 +78,7 @@ std::string StepCrashReason(const std::string& bytes) {
       i = text.find("*/", i + 2);
       if (i == std::string_view::npos) break;
       ++i;
-    } else if ((c == 'E' || c == 'e') && depth > 0 && i > 0 &&
+    } else if (in_point && (c == 'E' || c == 'e') && depth > 0 && i > 0 &&
                (IsDigit(text[i - 1]) || text[i - 1] == '.')) {  // the exponent of a real
       size_t start = i;
       while (start > 0 && (IsDigit(text[start - 1]) || text[start - 1] == '.' ||
@@ -89,7 +90,7 @@ std::string StepCrashReason(const std::string& bytes) {
       if (end - digits >= 3) {  // only a three-digit exponent can overflow
         std::string number(text.substr(start, end - start));
         if (std::isinf(std::strtod(number.c_str(), nullptr)))
-          return "the number " + number + " is beyond the range of a double";
+          return "a CARTESIAN_POINT coordinate (" + number + ") is beyond the range of a double";
       }
       i = end - 1;
     } else if (c == '(') {
@@ -108,18 +109,23 @@ std::string StepCrashReason(const std::string& bytes) {
         ++argument;
         argument_start = i + 1;
       }
-      if (c == ')' && depth > 0 && --depth == 0) oriented_edge = -1;
+      if (c == ')' && depth > 0 && --depth == 0) {
+        oriented_edge = -1;
+        in_point = false;
+      }
     } else if (c == ';') {
       depth = 0;
       oriented_edge = -1;
+      in_point = false;
     } else if (c == '#' && depth == 0) {  // "#id = KEYWORD (" starts an entity instance
       size_t digits_end = Skip(text, i + 1, IsDigit);
       size_t equals = Skip(text, digits_end, IsSpace);
       if (digits_end == i + 1 || equals >= text.size() || text[equals] != '=') continue;
       size_t keyword = Skip(text, equals + 1, IsSpace);
       size_t keyword_end = Skip(text, keyword, IsKeyword);
-      if (text.substr(keyword, keyword_end - keyword) == "ORIENTED_EDGE")
-        oriented_edge = EntityId(text.substr(i + 1, digits_end - i - 1));
+      std::string_view name = text.substr(keyword, keyword_end - keyword);
+      if (name == "ORIENTED_EDGE") oriented_edge = EntityId(text.substr(i + 1, digits_end - i - 1));
+      in_point = name == "CARTESIAN_POINT";
       i = keyword_end - 1;
     }
   }

@@ -17,9 +17,10 @@ constexpr int kMaxStepNesting = 1000;
 /// - parentheses nested deeper than kMaxStepNesting (outside strings and comments);
 /// - an ORIENTED_EDGE whose edge_element is itself, or leads back to it through other
 ///   ORIENTED_EDGEs (StepShape_OrientedEdge::EdgeStart recurses along that chain for ever);
-/// - a real number beyond the range of a double (1.E+999): an infinite coordinate makes
-///   ShapeFix_Edge::FixAddPCurve dereference a null curve in GeomProjLib::ProjectOnPlane, or
-///   search for ever in Extrema_GenExtPS (tests/data/fuzz).
+/// - a CARTESIAN_POINT coordinate beyond the range of a double (1.E+999): OCCT takes it as
+///   infinity, and ShapeFix_Edge::FixAddPCurve then dereferences a null curve in
+///   GeomProjLib::ProjectOnPlane or searches for ever in Extrema_GenExtPS (tests/data/fuzz).
+///   Infinite numbers elsewhere (directions, weights) are left to OCCT.
 /// Reads the text once; no OCCT call.
 std::string StepCrashReason(const std::string& bytes);
 
