@@ -58,10 +58,8 @@ long FirstCycle(const std::unordered_map<long, long>& edge_element) {
   return -1;
 }
 
-}  // namespace
-
-std::string StepCrashReason(const std::string& bytes) {
-  std::string_view text(bytes);
+// One pass of StepCrashReason; `strings` says whether quoted text is skipped.
+std::string Scan(std::string_view text, bool strings) {
   // edge_element of each ORIENTED_EDGE('name', *, *, #edge, .T.), by entity id.
   std::unordered_map<long, long> edge_element;
   long oriented_edge = -1;  // the ORIENTED_EDGE whose arguments are being read
@@ -71,10 +69,10 @@ std::string StepCrashReason(const std::string& bytes) {
   int depth = 0;
   for (size_t i = 0; i < text.size(); ++i) {
     char c = text[i];
-    if (c == '\'') {  // a string: '' inside it reads as two strings, which is fine here
+    if (strings && c == '\'') {  // a string: '' inside it reads as two strings, which is fine here
       i = text.find('\'', i + 1);
       if (i == std::string_view::npos) break;
-    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+    } else if (strings && c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
       i = text.find("*/", i + 2);
       if (i == std::string_view::npos) break;
       ++i;
@@ -94,7 +92,7 @@ std::string StepCrashReason(const std::string& bytes) {
       }
       i = end - 1;
     } else if (c == '(') {
-      if (++depth > kMaxStepNesting)
+      if (++depth > kMaxStepNesting && strings)  // names may hold any parentheses
         return "parentheses nested more than " + std::to_string(kMaxStepNesting) + " deep";
       if (depth == 1) {
         argument = 0;
@@ -133,6 +131,18 @@ std::string StepCrashReason(const std::string& bytes) {
   if (cycle < 0) return "";
   return "ORIENTED_EDGE #" + std::to_string(cycle) +
          " is its own edge_element, directly or through other ORIENTED_EDGEs";
+}
+
+}  // namespace
+
+// Quoted text is skipped in a first pass and read as code in a second: in a file with a broken
+// string, OCCT's parser and the first pass may disagree on where strings end.
+std::string StepCrashReason(const std::string& bytes) {
+  for (bool strings : {true, false}) {
+    std::string reason = Scan(bytes, strings);
+    if (!reason.empty()) return reason;
+  }
+  return "";
 }
 
 }  // namespace rdmesh

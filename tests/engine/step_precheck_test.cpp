@@ -84,13 +84,22 @@ TEST(StepPrecheckTest, RefusesInfiniteNumbers) {
       StepCrashReason(with_x("1.E+999")).find("a CARTESIAN_POINT coordinate (1.E+999) is beyond"),
       std::string::npos);
   EXPECT_NE(StepCrashReason(with_x("-2.5e309")).find("-2.5e309"), std::string::npos);
-  // Only numbers count: not names, strings or keywords.
-  EXPECT_EQ(StepCrashReason(SlicedCylinder(point, "#190=CARTESIAN_POINT('1.E+999',(0.,-10.,0.));")),
-            "");
+  // Only numbers count, not keywords; and only in points.
   EXPECT_EQ(StepCrashReason(SlicedCylinder(point, "#190=CARTESIAN_POINT('',(0.,-10.,0.)),E999;")),
             "");
   EXPECT_EQ(StepCrashReason(SlicedCylinder(point, point + "#9000=DIRECTION('',(1.E+999,0.,0.));")),
             "");
+}
+
+// libFuzzer's find (scripts/fuzz_smoke.sh): a copied part of the file left a string open, so
+// a scan that skips strings saw the infinite point as quoted text; OCCT's parser did not.
+TEST(StepPrecheckTest, BrokenStringHidesNothing) {
+  const std::string point = "#190=CARTESIAN_POINT('',(0.,-10.,0.));";
+  std::string bytes = SlicedCylinder(point, "#190=CARTESIAN_POINT('',(1.E+999,-10.,0.));");
+  const std::string context =
+      "#80=PRODUCT_DEFINITION_CONTEXT('3D Mechanical Parts',#153,'design');";
+  bytes.replace(bytes.find(context), context.size(), "#80=PRODUCT_DEFINITION_CONTEXT('3D;");
+  EXPECT_NE(StepCrashReason(bytes).find("1.E+999"), std::string::npos);
 }
 
 // The CAx-IF case: a shape representation listing an item of a type OCCT 7.6 does not know.
