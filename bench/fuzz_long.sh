@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# A long libFuzzer run of the STEP reader: scripts/fuzz_smoke.sh's build and seeds, no run limit,
-# and it goes on after a crash, hang or out-of-memory (libFuzzer -fork=1 -ignore_*), then counts
-# what it found. The inputs are in build-fuzz/artifacts/ (crash-*, timeout-*, oom-*, leak-*);
+# A long libFuzzer run of the STEP reader: scripts/fuzz_smoke.sh's build and seeds plus the corpus
+# models up to 64 KiB, no run limit, and it goes on after a crash, hang or out-of-memory
+# (libFuzzer -fork=1 -ignore_*), then counts what it found. The inputs are in build-fuzz/artifacts/ (crash-*, timeout-*, oom-*, leak-*);
 # minimise one with: build-fuzz/bin/step_fuzzer -minimize_crash=1 -runs=2000 FILE
 #   bench/fuzz_long.sh [MINUTES]      default 30
 set -euo pipefail
@@ -12,7 +12,7 @@ mkdir -p "$build/artifacts"
 stamp="$build/artifacts/.long_run_start"
 touch "$stamp"
 
-RDMESH_FUZZ_ARGS="-fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1" \
+RDMESH_FUZZ_CORPUS_SEEDS=1 RDMESH_FUZZ_ARGS="-fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1" \
   "$top/scripts/fuzz_smoke.sh" -1 "$((minutes * 60))" 2>&1 |
   tee "$build/fuzz_long.log" | grep -E '^#[0-9]+.*(pulse|DONE)|^INFO: fuzzed|^fuzz_smoke' || true
 
