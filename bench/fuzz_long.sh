@@ -2,7 +2,8 @@
 # A long libFuzzer run of the STEP reader: scripts/fuzz_smoke.sh's build and seeds plus the corpus
 # models up to 64 KiB, no run limit, and it goes on after a crash, hang or out-of-memory
 # (libFuzzer -fork=1 -ignore_*), then counts what it found. The inputs are in
-# build-fuzz/artifacts/ (crash-*, timeout-*, oom-*, leak-*); minimise one with: build-fuzz/bin/step_fuzzer -minimize_crash=1 -runs=2000 FILE
+# build-fuzz/artifacts/ (crash-*, timeout-*, oom-*, leak-*); minimise one with
+#   build-fuzz/bin/step_fuzzer -minimize_crash=1 -runs=2000 FILE
 #   bench/fuzz_long.sh [MINUTES]      default 30
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
