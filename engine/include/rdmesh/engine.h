@@ -38,6 +38,10 @@ struct ModelInfo {
 /// Model file formats.
 enum class ModelFormat { kAuto, kStep, kIges, kBrep };
 
+/// The format named by a path's extension (.step/.stp, .iges/.igs, .brep/.brp, any case), or
+/// kAuto when the extension is none of these.
+ModelFormat FormatFromExtension(const std::string& path);
+
 /// Loads a model from a file; the format follows the extension (.step/.stp, .iges/.igs, .brep).
 /// kNotFound, kParseError (with the file name and the reason) or kEmptyModel on failure.
 /// Thread-safe (OCCT's readers are serialised internally).
