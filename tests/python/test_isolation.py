@@ -9,17 +9,23 @@ import time
 import grpc
 import pytest
 
-from conftest import CUBE, CYLINDER, NIST, wait_until
+from conftest import CUBE, CYLINDER, DATA, NIST, wait_until
 from rdmesh import RdmeshError
 
 
-def _self_referencing_edge():
-    """CYLINDER with one ORIENTED_EDGE whose edge element is itself: OCCT's STEP reader recurses
-    in StepShape_OrientedEdge::EdgeStart until the stack overflows (SIGSEGV)."""
+def _oriented_edge_chain(links=200000):
+    """CYLINDER whose ORIENTED_EDGE #29 reaches its EDGE_CURVE through a chain of `links`
+    ORIENTED_EDGEs: no cycle (the STEP pre-checks refuse cycles), but OCCT's reader recurses once
+    per link in StepShape_OrientedEdge::EdgeStart and overflows its stack (SIGSEGV)."""
     text = CYLINDER.read_text()
     line = "#29=ORIENTED_EDGE('',*,*,#50,.T.);"
-    assert line in text
-    return text.replace(line, "#29=ORIENTED_EDGE('',*,*,#29,.T.);").encode()
+    assert line in text and "ENDSEC;\nEND-ISO" in text
+    first = 900000
+    chain = ["#%d=ORIENTED_EDGE('',*,*,#%d,.T.);" % (first + i, first + i + 1)
+             for i in range(links - 1)]
+    chain.append("#%d=ORIENTED_EDGE('',*,*,#50,.T.);" % (first + links - 1))
+    text = text.replace(line, "#29=ORIENTED_EDGE('',*,*,#%d,.T.);" % first)
+    return text.replace("ENDSEC;\nEND-ISO", "\n".join(chain) + "\nENDSEC;\nEND-ISO", 1).encode()
 
 
 def _repeated_edge_loop(times):
@@ -61,26 +67,41 @@ def test_reader_crash_fails_its_call_only(start_daemon):
     good = threading.Thread(target=lambda: done.update(r=client.mesh(CYLINDER, max_edge_length=4)))
     good.start()
     with pytest.raises(RdmeshError) as error:
-        client.upload(_self_referencing_edge(), name="selfref.step")
+        client.upload(_oriented_edge_chain(), name="chain.step")
     assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
     assert "the STEP reader crashed (SIGSEGV) on this model" in error.value.details
-    assert "selfref.step" in error.value.details
+    assert "chain.step" in error.value.details
     good.join()
     assert done["r"].summary.faces_ok == 5 and done["r"].summary.faces_failed == 0
     assert daemon.alive()
     status = client.server_status()
     assert status.workers_lost == 1
     assert status.refused_models == 1
-    # The same bytes again: refused at once, without a worker parsing them.
+    # The same bytes again: refused without a worker parsing them (the time is the upload's).
     start = time.monotonic()
     with pytest.raises(RdmeshError) as again:
-        client.upload(_self_referencing_edge(), name="selfref.step")
-    assert time.monotonic() - start < 0.5
+        client.upload(_oriented_edge_chain(), name="chain.step")
+    assert time.monotonic() - start < 3.0
     assert again.value.code == grpc.StatusCode.INVALID_ARGUMENT
     assert "crashed (SIGSEGV) on this model before; refused without parsing it again" in \
         again.value.details
     assert client.server_status().workers_lost == 1
     # And the service goes on.
+    assert client.mesh(CUBE).summary.faces_ok == 9
+
+
+def test_mesher_crash_fails_its_job_only(start_daemon):
+    daemon = start_daemon()
+    client = daemon.client()
+    # LINE #235 lost its CARTESIAN_POINT: OCCT reads the model, rdmesh's constrained
+    # triangulation then crashes on the face (tests/data/fuzz/README.md).
+    info = client.upload(DATA / "fuzz" / "crash_mesher_missing_point.step")
+    with pytest.raises(RdmeshError) as error:
+        client.mesh(info)
+    assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "the mesher crashed (SIGSEGV) on this model" in error.value.details
+    assert daemon.alive()
+    assert client.server_status().workers_lost == 1
     assert client.mesh(CUBE).summary.faces_ok == 9
 
 
@@ -165,9 +186,10 @@ def test_absurd_options_free_the_slot_within_a_second_of_the_deadline(start_daem
 def test_timeout_seconds_is_enforced_on_absurd_options(start_daemon):
     daemon = start_daemon("--max-triangles", "0")
     client = daemon.client()
+    info = client.upload(CYLINDER)
     start = time.monotonic()
     with pytest.raises(RdmeshError) as error:
-        client.mesh(CYLINDER, max_deviation=1e-12, timeout_seconds=2)
+        client.mesh(info, max_deviation=1e-12, timeout_seconds=2)
     assert error.value.code == grpc.StatusCode.DEADLINE_EXCEEDED
     assert time.monotonic() - start < 2.0 + 1.5
     assert wait_until(lambda: client.server_status().active_jobs == 0, 1.0) is not None
