@@ -5,9 +5,9 @@
 // between the nodes of the edge's vertices), so a mesh rebuilt from a remote run, which carries
 // the classification but not the edge grids, gives the same lines as the run itself.
 
-#include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom2d_Curve.hxx>
+#include <Geom_Surface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
@@ -38,13 +38,17 @@ std::optional<gp_Dir> FaceNormalOnEdge(const TopoDS_Face& face, const TopoDS_Edg
     Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last);
     if (pcurve.IsNull()) return std::nullopt;
     gp_Pnt2d uv = pcurve->Value(t);
-    BRepAdaptor_Surface surface(face);
+    // The bare surface: an adaptor would first compute the face's (u,v) bounds.
+    TopLoc_Location location;
+    Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
+    if (surface.IsNull()) return std::nullopt;
     gp_Pnt point;
     gp_Vec du, dv;
-    surface.D1(uv.X(), uv.Y(), point, du, dv);
+    surface->D1(uv.X(), uv.Y(), point, du, dv);
     gp_Vec normal = du.Crossed(dv);
     if (normal.Magnitude() <= 1e-12 * std::max(1.0, du.Magnitude() * dv.Magnitude()))
       return std::nullopt;
+    normal.Transform(location.Transformation());
     if (face.Orientation() == TopAbs_REVERSED) normal.Reverse();
     return gp_Dir(normal);
   } catch (const Standard_Failure&) {
