@@ -125,47 +125,56 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
   for (int32_t f : mesh.triangle_face)
     if (f >= 1 && f <= model.face_count()) meshed[f] = true;
   TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
-  TopExp::MapShapesAndAncestors(model.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  try {
+    TopExp::MapShapesAndAncestors(model.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  } catch (const Standard_Failure& failure) {
+    return Status(StatusCode::kInternal,
+                  std::string("edge lines: no edge-face map: ") + failure.GetMessageString());
+  }
 
   std::vector<EdgeLine> lines;
   for (int e = 1; e <= ne; ++e) {
-    const TopoDS_Edge& edge = model.edge(e);
-    EdgeLine line;
-    line.edge_id = e;
-    bool any_meshed = false;
-    if (const TopTools_ListOfShape* faces = edge_faces.Seek(edge)) {
-      for (const TopoDS_Shape& face : *faces) {
-        int f = model.faces.FindIndex(face);
-        if (f < 1) continue;
-        line.faces.push_back(f);
-        any_meshed = any_meshed || meshed[f];
-        line.seam = line.seam || BRep_Tool::IsClosed(edge, TopoDS::Face(face));
+    try {  // an edge OCCT cannot answer for is left out, the others still get lines
+      const TopoDS_Edge& edge = model.edge(e);
+      EdgeLine line;
+      line.edge_id = e;
+      bool any_meshed = false;
+      if (const TopTools_ListOfShape* faces = edge_faces.Seek(edge)) {
+        for (const TopoDS_Shape& face : *faces) {
+          int f = model.faces.FindIndex(face);
+          if (f < 1) continue;
+          line.faces.push_back(f);
+          any_meshed = any_meshed || meshed[f];
+          line.seam = line.seam || BRep_Tool::IsClosed(edge, TopoDS::Face(face));
+        }
       }
+      if (!any_meshed) continue;
+      std::sort(line.faces.begin(), line.faces.end());
+      line.faces.erase(std::unique(line.faces.begin(), line.faces.end()), line.faces.end());
+
+      TopoDS_Vertex first, last;
+      TopExp::Vertices(TopoDS::Edge(edge.Oriented(TopAbs_FORWARD)), first, last);
+      std::optional<int32_t> start =
+          VertexNode(model, mesh, vertex_node, vertex_nodes,
+                     first.IsNull() ? 0 : model.vertices.FindIndex(first));
+      std::optional<int32_t> end = VertexNode(model, mesh, vertex_node, vertex_nodes,
+                                              last.IsNull() ? 0 : model.vertices.FindIndex(last));
+      if (!start || !end) continue;  // a mesh without vertex nodes: nothing to anchor the line
+      std::vector<std::pair<double, int32_t>>& inner = edge_nodes[e];
+      std::sort(inner.begin(), inner.end());
+      line.nodes.push_back(*start);
+      for (const auto& [t, node] : inner) line.nodes.push_back(node);
+      line.nodes.push_back(*end);
+      line.nodes.erase(std::unique(line.nodes.begin(), line.nodes.end()), line.nodes.end());
+
+      line.degenerate = BRep_Tool::Degenerated(edge) || line.nodes.size() < 2;
+      if (!line.degenerate && !line.seam && line.faces.size() >= 2)
+        line.dihedral = Dihedral(model, edge, line.faces);
+      const bool free = line.faces.size() == 1 && !line.seam && !line.degenerate;
+      line.sharp = free || line.dihedral > sharp_angle;
+      lines.push_back(std::move(line));
+    } catch (const Standard_Failure&) {
     }
-    if (!any_meshed) continue;
-    std::sort(line.faces.begin(), line.faces.end());
-    line.faces.erase(std::unique(line.faces.begin(), line.faces.end()), line.faces.end());
-
-    TopoDS_Vertex first, last;
-    TopExp::Vertices(TopoDS::Edge(edge.Oriented(TopAbs_FORWARD)), first, last);
-    std::optional<int32_t> start = VertexNode(model, mesh, vertex_node, vertex_nodes,
-                                              first.IsNull() ? 0 : model.vertices.FindIndex(first));
-    std::optional<int32_t> end = VertexNode(model, mesh, vertex_node, vertex_nodes,
-                                            last.IsNull() ? 0 : model.vertices.FindIndex(last));
-    if (!start || !end) continue;  // a mesh without vertex nodes: nothing to anchor the line
-    std::vector<std::pair<double, int32_t>>& inner = edge_nodes[e];
-    std::sort(inner.begin(), inner.end());
-    line.nodes.push_back(*start);
-    for (const auto& [t, node] : inner) line.nodes.push_back(node);
-    line.nodes.push_back(*end);
-    line.nodes.erase(std::unique(line.nodes.begin(), line.nodes.end()), line.nodes.end());
-
-    line.degenerate = BRep_Tool::Degenerated(edge) || line.nodes.size() < 2;
-    if (!line.degenerate && !line.seam && line.faces.size() >= 2)
-      line.dihedral = Dihedral(model, edge, line.faces);
-    const bool free = line.faces.size() == 1 && !line.seam && !line.degenerate;
-    line.sharp = free || line.dihedral > sharp_angle;
-    lines.push_back(std::move(line));
   }
   return lines;
 }

@@ -76,10 +76,12 @@ Status WriteMesh(const Model& model, const MeshResult& result, const std::string
                  const WriteOptions& options = {});
 
 /// The edge polylines of an assembled mesh (MeshResult::edges): one EdgeLine per B-rep edge that
-/// bounds a face with triangles in `mesh`, in edge id order, built from the mesh's node
+/// bounds a face with triangles in `mesh` (but one whose B-rep OCCT fails to query, or whose
+/// vertices have no node at all), in edge id order, built from the mesh's node
 /// classification (node_dim, node_entity, node_param), so a mesh rebuilt from a remote run gets
 /// the same lines. An edge is sharp when the dihedral angle at its midpoint exceeds
-/// `sharp_angle` (degrees). kInternal when the mesh lacks its node classification.
+/// `sharp_angle` (degrees). kInternal when the mesh lacks its node classification or OCCT
+/// cannot map the shape's edges to their faces.
 Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mesh,
                                              double sharp_angle = kDefaultSharpEdgeAngle);
 

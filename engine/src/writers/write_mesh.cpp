@@ -84,17 +84,17 @@ Status WriteMesh(const Model& model, const MeshResult& result, const std::string
   if (!checked.ok()) return checked;
   const std::string ext = Extension(path);
   const bool edges_wanted = options.edges && (ext == ".msh" || ext == ".obj");
-  std::vector<EdgeLine> derived;
-  if (edges_wanted && result.edges.empty() && result.mesh.triangle_count() > 0) {
-    Result<std::vector<EdgeLine>> built = BuildEdgeLines(model, result.mesh);
-    if (!built.ok()) return built.status();
-    derived = std::move(*built);
-  }
-  const std::vector<EdgeLine>& edges =
-      edges_wanted && !result.edges.empty() ? result.edges : derived;  // derived: maybe none
-  checked = CheckEdges(model, result.mesh, edges);
-  if (!checked.ok()) return checked;
   try {
+    std::vector<EdgeLine> derived;
+    if (edges_wanted && result.edges.empty() && result.mesh.triangle_count() > 0) {
+      Result<std::vector<EdgeLine>> built = BuildEdgeLines(model, result.mesh);
+      if (!built.ok()) return built.status();
+      derived = std::move(*built);
+    }
+    const std::vector<EdgeLine>& edges =
+        edges_wanted && !result.edges.empty() ? result.edges : derived;  // derived: maybe none
+    checked = CheckEdges(model, result.mesh, edges);
+    if (!checked.ok()) return checked;
     return Dispatch(model, result, edges, options, path);
   } catch (const Standard_Failure& failure) {
     return WriteError(path, failure.GetMessageString());
