@@ -181,7 +181,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
 
   EnterPhase(Phase::kWriting);
   auto write_start = std::chrono::steady_clock::now();
-  Status written = WriteMesh(**model, *result, output);
+  Status written = WriteMesh(**model, *result, output, mesh_flags.write);
   run.write_seconds = SecondsSince(write_start);
   if (!written.ok()) return Fail(flags, kExitWriteFailed, written);
 
