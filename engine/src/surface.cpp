@@ -13,6 +13,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <gp_Cone.hxx>
+#include <gp_Cylinder.hxx>
+#include <gp_Pln.hxx>
 #include <gp_Pnt.hxx>
 #include <gp_Sphere.hxx>
 #include <gp_Vec.hxx>
@@ -138,20 +141,46 @@ Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 // evaluates through a polynomial cache of one knot span and rebuilds it whenever a point falls in
 // another span, which refinement does all the time (a triangle's samples straddle knot lines).
 // So B-splines get a few adaptors, each kept on the span it last served; the cache content
-// depends only on the span, so the values are the same. Spheres skip the adaptor's dispatch.
+// depends only on the span, so the values are the same. Planes, cylinders, cones and spheres
+// skip the adaptor's dispatch.
 class OcctSurface final : public Surface {
  public:
   explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {
-    if (adaptor_.GetType() == GeomAbs_Sphere) {
-      gp_Sphere sphere = adaptor_.Sphere();
-      const gp_Ax3& pos = sphere.Position();
-      sphere_ = {pos.XDirection().XYZ(), pos.YDirection().XYZ(), pos.Direction().XYZ(),
-                 pos.Location().XYZ()};
-      radius_ = sphere.Radius();
-      is_sphere_ = true;
-      u_trig_.resize(size_t{1} << kTrigBits);
-      v_trig_.resize(size_t{1} << kTrigBits);
+    auto frame = [&](const gp_Ax3& pos) {
+      frame_ = {pos.XDirection().XYZ(), pos.YDirection().XYZ(), pos.Direction().XYZ(),
+                pos.Location().XYZ()};
+    };
+    switch (adaptor_.GetType()) {
+      case GeomAbs_Plane:
+        frame(adaptor_.Plane().Position());
+        kind_ = Kind::kPlane;
+        break;
+      case GeomAbs_Cylinder:
+        frame(adaptor_.Cylinder().Position());
+        radius_ = adaptor_.Cylinder().Radius();
+        kind_ = Kind::kCylinder;
+        break;
+      case GeomAbs_Cone: {
+        gp_Cone cone = adaptor_.Cone();
+        frame(cone.Position());
+        radius_ = cone.RefRadius();
+        // ElSLib::ConeD0 takes the sine and cosine of the semi-angle at every call: the same
+        // values each time.
+        cone_sin_ = std::sin(cone.SemiAngle());
+        cone_cos_ = std::cos(cone.SemiAngle());
+        kind_ = Kind::kCone;
+        break;
+      }
+      case GeomAbs_Sphere:
+        frame(adaptor_.Sphere().Position());
+        radius_ = adaptor_.Sphere().Radius();
+        kind_ = Kind::kSphere;
+        v_trig_.resize(size_t{1} << kTrigBits);
+        break;
+      default:
+        break;
     }
+    if (kind_ != Kind::kPlane && kind_ != Kind::kOther) u_trig_.resize(size_t{1} << kTrigBits);
     if (adaptor_.GetType() != GeomAbs_BSplineSurface) return;
     Handle(Geom_BSplineSurface) bspline = adaptor_.BSpline();
     for (int i = 1; i <= bspline->NbUKnots(); ++i) uknots.at.push_back(bspline->UKnot(i));
@@ -162,7 +191,18 @@ class OcctSurface final : public Surface {
     for (Span& span : spans_) span.adaptor.Load(surface);
   }
   Vec3 Point(double u, double v) override {
-    if (is_sphere_) return SpherePoint(u, v);
+    switch (kind_) {
+      case Kind::kPlane:
+        return PlanePoint(u, v);
+      case Kind::kCylinder:
+        return CylinderPoint(u, v);
+      case Kind::kCone:
+        return ConePoint(u, v);
+      case Kind::kSphere:
+        return SpherePoint(u, v);
+      case Kind::kOther:
+        break;
+    }
     return ToVec(Adaptor(u, v).Value(u, v));
   }
   Vec3 Normal(double u, double v) override {
@@ -179,21 +219,45 @@ class OcctSurface final : public Surface {
   }
 
  private:
-  // OCCT's sphere evaluation (ElSLib::SphereD0) without the adaptor's dispatch: the same
-  // arithmetic in the same order, so the same bits (surface_test checks it). The cosine and sine
-  // of each parameter come from a small table: refinement's probes often share one of u, v
-  // (a smoothing probe that moves along u keeps the v of every sample around it).
+  // OCCT's evaluations of the elementary surfaces (ElSLib::PlaneD0, CylinderD0, ConeD0,
+  // SphereD0) without the adaptor's dispatch: the same arithmetic in the same order, so the same
+  // bits (surface_test checks it). The cosine and sine of each angle parameter come from a small
+  // table: refinement's probes often share one of u, v (a smoothing probe that moves along u
+  // keeps the v of every sample around it).
+  Vec3 PlanePoint(double u, double v) const {
+    const gp_XYZ &x = frame_[0], &y = frame_[1], &o = frame_[3];
+    return {u * x.X() + v * y.X() + o.X(), u * x.Y() + v * y.Y() + o.Y(),
+            u * x.Z() + v * y.Z() + o.Z()};
+  }
+  // a1 x + a2 y + a3 z + o, summed left to right as ElSLib does.
+  Vec3 InFrame(double a1, double a2, double a3) const {
+    const gp_XYZ &x = frame_[0], &y = frame_[1], &z = frame_[2], &o = frame_[3];
+    return {a1 * x.X() + a2 * y.X() + a3 * z.X() + o.X(),
+            a1 * x.Y() + a2 * y.Y() + a3 * z.Y() + o.Y(),
+            a1 * x.Z() + a2 * y.Z() + a3 * z.Z() + o.Z()};
+  }
+  Vec3 CylinderPoint(double u, double v) {
+    const CosSin& cu = Trig(u, u_trig_);
+    double a1 = radius_ * cu.cos;
+    double a2 = radius_ * cu.sin;
+    return InFrame(a1, a2, v);
+  }
+  Vec3 ConePoint(double u, double v) {
+    const CosSin& cu = Trig(u, u_trig_);
+    double r = radius_ + v * cone_sin_;
+    double a3 = v * cone_cos_;
+    double a1 = r * cu.cos;
+    double a2 = r * cu.sin;
+    return InFrame(a1, a2, a3);
+  }
   Vec3 SpherePoint(double u, double v) {
-    const gp_XYZ &x = sphere_[0], &y = sphere_[1], &z = sphere_[2], &o = sphere_[3];
     const CosSin& cv = Trig(v, v_trig_);
     const CosSin& cu = Trig(u, u_trig_);
     double r = radius_ * cv.cos;
     double a3 = radius_ * cv.sin;
     double a1 = r * cu.cos;
     double a2 = r * cu.sin;
-    return {a1 * x.X() + a2 * y.X() + a3 * z.X() + o.X(),
-            a1 * x.Y() + a2 * y.Y() + a3 * z.Y() + o.Y(),
-            a1 * x.Z() + a2 * y.Z() + a3 * z.Z() + o.Z()};
+    return InFrame(a1, a2, a3);
   }
 
   // std::cos(t), std::sin(t), remembered by the bits of t in a direct-mapped table.
@@ -243,10 +307,12 @@ class OcctSurface final : public Surface {
   }
 
   GeomAdaptor_Surface adaptor_;
-  bool is_sphere_ = false;
-  std::array<gp_XYZ, 4> sphere_;  // x, y and z directions and centre of a sphere
-  double radius_ = 0;
-  std::vector<CosSin> u_trig_, v_trig_;  // a sphere's cos and sin of recent parameters
+  enum class Kind { kOther, kPlane, kCylinder, kCone, kSphere };
+  Kind kind_ = Kind::kOther;             // which closed form Point() uses, if any
+  std::array<gp_XYZ, 4> frame_;          // x, y and z directions and origin of an elementary one
+  double radius_ = 0;                    // a cone's reference radius
+  double cone_sin_ = 0, cone_cos_ = 0;   // of a cone's semi-angle
+  std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
   std::vector<Span> spans_;              // empty unless B-spline
   uint64_t clock_ = 0;
 };
