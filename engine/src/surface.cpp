@@ -3,11 +3,14 @@
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Tool.hxx>
+#include <BSplCLib_CacheParams.hxx>
+#include <BSplSLib.hxx>
 #include <GeomAdaptor_Surface.hxx>
 #include <GeomConvert.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
+#include <TColStd_Array2OfReal.hxx>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -137,6 +140,69 @@ class CircleCurve final : public Curve {
 
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 
+// S(u,v) of a B-spline surface on one knot span, computed as OCCT's adaptor does it, bit for bit:
+// BSplSLib_Cache's Taylor coefficients of the span (built by BSplSLib::BuildCache for the span
+// its parameters locate), evaluated by Horner's rule along the direction of higher degree, then
+// the other (BSplSLib_Cache::D0 with PLib::NoDerivativeEvalPolynomial). Without the adaptor's
+// dispatch, its cache handle and the library's general polynomial loops.
+class SpanPolynomial {
+ public:
+  explicit SpanPolynomial(const Geom_BSplineSurface& s)
+      : u_(s.UDegree(), s.IsUPeriodic(), s.UKnotSequence()),
+        v_(s.VDegree(), s.IsVPeriodic(), s.VKnotSequence()),
+        dimension_(s.Weights() ? 4 : 3),
+        coeffs_(1, std::max(u_.Degree, v_.Degree) + 1, 1,
+                dimension_ * (std::min(u_.Degree, v_.Degree) + 1)) {}
+
+  Vec3 Value(const Geom_BSplineSurface& s, double u, double v) {
+    if (!built_ || !u_.IsCacheValid(u) || !v_.IsCacheValid(v)) Build(s, u, v);
+    // Parameters local to the span: BSplSLib centres it, with half its length as unit.
+    double half_u = 0.5 * u_.SpanLength, start_u = u_.SpanStart + half_u;
+    double half_v = 0.5 * v_.SpanLength, start_v = v_.SpanStart + half_v;
+    double lu = (u_.PeriodicNormalization(u) - start_u) / half_u;
+    double lv = (v_.PeriodicNormalization(v) - start_v) / half_v;
+    const bool u_major = u_.Degree > v_.Degree;
+    const int major = u_major ? u_.Degree : v_.Degree, minor = u_major ? v_.Degree : u_.Degree;
+    const double t_major = u_major ? lu : lv, t_minor = u_major ? lv : lu;
+    const int cols = coeffs_.RowLength();
+    double row[4 * 26];  // cols <= 4 x (BSplCLib::MaxDegree() + 1)
+    const double* c = &coeffs_(1, 1) + major * cols;
+    for (int j = 0; j < cols; ++j) row[j] = c[j];
+    for (int i = 0; i < major; ++i) {
+      c -= cols;
+      for (int j = 0; j < cols; ++j) row[j] = row[j] * t_major + c[j];
+    }
+    double r[4];
+    const double* d = row + minor * dimension_;
+    for (int j = 0; j < dimension_; ++j) r[j] = d[j];
+    for (int i = 0; i < minor; ++i) {
+      d -= dimension_;
+      for (int j = 0; j < dimension_; ++j) r[j] = r[j] * t_minor + d[j];
+    }
+    if (dimension_ == 4) r[0] /= r[3], r[1] /= r[3], r[2] /= r[3];
+    return {r[0], r[1], r[2]};
+  }
+
+ private:
+  // BSplSLib_Cache::BuildCache.
+  void Build(const Geom_BSplineSurface& s, double u, double v) {
+    double nu = u_.PeriodicNormalization(u), nv = v_.PeriodicNormalization(v);
+    u_.LocateParameter(nu, s.UKnotSequence());
+    v_.LocateParameter(nv, s.VKnotSequence());
+    double half_u = 0.5 * u_.SpanLength, half_v = 0.5 * v_.SpanLength;
+    BSplSLib::BuildCache(u_.SpanStart + half_u, v_.SpanStart + half_v, half_u, half_v,
+                         u_.IsPeriodic, v_.IsPeriodic, u_.Degree, v_.Degree, u_.SpanIndex,
+                         v_.SpanIndex, s.UKnotSequence(), s.VKnotSequence(), s.Poles(), s.Weights(),
+                         coeffs_);
+    built_ = true;
+  }
+
+  BSplCLib_CacheParams u_, v_;
+  const int dimension_;  // 3, or 4 with the weight
+  TColStd_Array2OfReal coeffs_;
+  bool built_ = false;
+};
+
 // OCCT evaluator, with two speed-ups that keep OCCT's values bit for bit. A B-spline adaptor
 // evaluates through a polynomial cache of one knot span and rebuilds it whenever a point falls in
 // another span, which refinement does all the time (a triangle's samples straddle knot lines).
@@ -187,8 +253,12 @@ class OcctSurface final : public Surface {
     for (int i = 1; i <= bspline->NbVKnots(); ++i) vknots.at.push_back(bspline->VKnot(i));
     if (bspline->IsUPeriodic()) uknots.period = uknots.at.back() - uknots.at.front();
     if (bspline->IsVPeriodic()) vknots.period = vknots.at.back() - vknots.at.front();
+    bspline_ = bspline;
     spans_.resize(kSpans);
-    for (Span& span : spans_) span.adaptor.Load(surface);
+    for (Span& span : spans_) {
+      span.adaptor.Load(surface);
+      span.polynomial = std::make_unique<SpanPolynomial>(*bspline);
+    }
   }
   Vec3 Point(double u, double v) override {
     switch (kind_) {
@@ -203,7 +273,8 @@ class OcctSurface final : public Surface {
       case Kind::kOther:
         break;
     }
-    return ToVec(Adaptor(u, v).Value(u, v));
+    if (!spans_.empty()) return SpanOf(u, v).polynomial->Value(*bspline_, u, v);
+    return ToVec(adaptor_.Value(u, v));
   }
   Vec3 Normal(double u, double v) override {
     gp_Pnt p;
@@ -279,18 +350,22 @@ class OcctSurface final : public Surface {
   struct Span {
     double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // its knot span: [u0, u1) x [v0, v1)
     uint64_t last_use = 0;
-    GeomAdaptor_Surface adaptor;
+    GeomAdaptor_Surface adaptor;                 // for normals
+    std::unique_ptr<SpanPolynomial> polynomial;  // for points
   };
-  // The adaptor to evaluate (u, v) with: for a B-spline the one on its knot span, else the
-  // least recently used one, which moves there.
+  // The adaptor to evaluate (u, v) with: for a B-spline its span's.
   const GeomAdaptor_Surface& Adaptor(double u, double v) {
-    if (spans_.empty()) return adaptor_;
+    return spans_.empty() ? adaptor_ : SpanOf(u, v).adaptor;
+  }
+  // A B-spline's span slot for (u, v): the one on its knot span, else the least recently used
+  // one, which moves there.
+  Span& SpanOf(double u, double v) {
     ++clock_;
     Span* oldest = &spans_[0];
     for (Span& span : spans_) {
       if (span.u0 <= u && u < span.u1 && span.v0 <= v && v < span.v1) {
         span.last_use = clock_;
-        return span.adaptor;
+        return span;
       }
       if (span.last_use < oldest->last_use) oldest = &span;
     }
@@ -303,7 +378,7 @@ class OcctSurface final : public Surface {
     interval(uknots.at, u, &oldest->u0, &oldest->u1);
     interval(vknots.at, v, &oldest->v0, &oldest->v1);
     oldest->last_use = clock_;
-    return oldest->adaptor;
+    return *oldest;
   }
 
   GeomAdaptor_Surface adaptor_;
@@ -313,6 +388,7 @@ class OcctSurface final : public Surface {
   double radius_ = 0;                    // a cone's reference radius
   double cone_sin_ = 0, cone_cos_ = 0;   // of a cone's semi-angle
   std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
+  Handle(Geom_BSplineSurface) bspline_;  // null unless B-spline
   std::vector<Span> spans_;              // empty unless B-spline
   uint64_t clock_ = 0;
 };

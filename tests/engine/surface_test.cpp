@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCone.hxx>
@@ -11,7 +12,12 @@
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
 #include <BRep_Tool.hxx>
+#include <GeomAPI_PointsToBSplineSurface.hxx>
 #include <GeomAdaptor_Surface.hxx>
+#include <GeomConvert.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <Geom_ToroidalSurface.hxx>
+#include <TColgp_Array2OfPnt.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <algorithm>
@@ -110,6 +116,35 @@ void ExpectFacesMatchOcct(const TopoDS_Shape& shape, GeomAbs_SurfaceType type) {
     }
   }
   EXPECT_GT(faces, 0);
+}
+
+TEST(SurfaceTest, BSplinePointsMatchOcctBitForBit) {
+  // Non-rational, bicubic over many knot spans, and rational (a torus as NURBS, degree 2).
+  TColgp_Array2OfPnt grid(1, 9, 1, 7);
+  for (int i = 1; i <= 9; ++i)
+    for (int j = 1; j <= 7; ++j)
+      grid(i, j) = gp_Pnt(1.5 * i, 0.8 * j, std::sin(0.9 * i) * std::cos(1.3 * j));
+  Handle(Geom_BSplineSurface) wavy = GeomAPI_PointsToBSplineSurface(grid).Surface();
+  Handle(Geom_BSplineSurface) torus = GeomConvert::SurfaceToBSplineSurface(
+      new Geom_ToroidalSurface(gp_Ax3(gp_Pnt(0.3, -2, 1), gp_Dir(0.2, -0.4, 1)), 3.0, 1.25));
+  for (const Handle(Geom_BSplineSurface) & bspline : {wavy, torus}) {
+    TopoDS_Face face = BRepBuilderAPI_MakeFace(bspline, 1e-7);
+    std::unique_ptr<Surface> ours = MakeFaceSurface(face, false);
+    GeomAdaptor_Surface occt(BRep_Tool::Surface(face));
+    ASSERT_EQ(occt.GetType(), GeomAbs_BSplineSurface);
+    // Random points, then the same points again in another order (other spans cached), and the
+    // knots themselves, where the span a parameter falls in is decided.
+    std::vector<Vec2> points = Samples(*ours, 5000, 6);
+    std::shuffle(points.begin(), points.end(), std::mt19937(7));
+    std::vector<Vec2> more = Samples(*ours, 5000, 6);
+    points.insert(points.end(), more.begin(), more.end());
+    for (double u : ours->uknots.at)
+      for (double v : ours->vknots.at) points.push_back({u, v});
+    for (const Vec2& q : points) {
+      gp_Pnt p = occt.Value(q.x, q.y);
+      ASSERT_TRUE(SameBits(ours->Point(q.x, q.y), {p.X(), p.Y(), p.Z()}));
+    }
+  }
 }
 
 TEST(SurfaceTest, SphereMatchesOcctBitForBit) {
