@@ -152,7 +152,15 @@ class SpanPolynomial {
         v_(s.VDegree(), s.IsVPeriodic(), s.VKnotSequence()),
         dimension_(s.Weights() ? 4 : 3),
         coeffs_(1, std::max(u_.Degree, v_.Degree) + 1, 1,
-                dimension_ * (std::min(u_.Degree, v_.Degree) + 1)) {}
+                dimension_ * (std::min(u_.Degree, v_.Degree) + 1)) {
+    const int minor = std::min(u_.Degree, v_.Degree);
+    if (minor >= 1 && minor <= 3) {
+      using Fn = decltype(horner_);
+      static constexpr Fn kFixed[2][3] = {{Horner<3, 1>, Horner<3, 2>, Horner<3, 3>},
+                                          {Horner<4, 1>, Horner<4, 2>, Horner<4, 3>}};
+      horner_ = kFixed[dimension_ - 3][minor - 1];
+    }
+  }
 
   Vec3 Value(const Geom_BSplineSurface& s, double u, double v) {
     if (!built_ || !u_.IsCacheValid(u) || !v_.IsCacheValid(v)) Build(s, u, v);
@@ -163,22 +171,8 @@ class SpanPolynomial {
     double lv = (v_.PeriodicNormalization(v) - start_v) / half_v;
     const bool u_major = u_.Degree > v_.Degree;
     const int major = u_major ? u_.Degree : v_.Degree, minor = u_major ? v_.Degree : u_.Degree;
-    const double t_major = u_major ? lu : lv, t_minor = u_major ? lv : lu;
-    const int cols = coeffs_.RowLength();
-    double row[4 * 26];  // cols <= 4 x (BSplCLib::MaxDegree() + 1)
-    const double* c = &coeffs_(1, 1) + major * cols;
-    for (int j = 0; j < cols; ++j) row[j] = c[j];
-    for (int i = 0; i < major; ++i) {
-      c -= cols;
-      for (int j = 0; j < cols; ++j) row[j] = row[j] * t_major + c[j];
-    }
     double r[4];
-    const double* d = row + minor * dimension_;
-    for (int j = 0; j < dimension_; ++j) r[j] = d[j];
-    for (int i = 0; i < minor; ++i) {
-      d -= dimension_;
-      for (int j = 0; j < dimension_; ++j) r[j] = r[j] * t_minor + d[j];
-    }
+    horner_(&coeffs_(1, 1), major, minor, dimension_, u_major ? lu : lv, u_major ? lv : lu, r);
     if (dimension_ == 4) r[0] /= r[3], r[1] /= r[3], r[2] /= r[3];
     return {r[0], r[1], r[2]};
   }
@@ -197,8 +191,33 @@ class SpanPolynomial {
     built_ = true;
   }
 
+  // The span's polynomial at (t_major, t_minor) into r[0..dimension): Horner's rule along the
+  // direction of higher degree `major` for each of the coefficient rows' columns, then along the
+  // other (PLib::NoDerivativeEvalPolynomial twice). kDim and kMinor > 0 fix the row length, so
+  // that the compiler unrolls the columns; the arithmetic per column is the same.
+  template <int kDim, int kMinor>
+  static void Horner(const double* coeffs, int major, int minor, int dimension, double t_major,
+                     double t_minor, double r[4]) {
+    const int dim = kMinor > 0 ? kDim : dimension, low = kMinor > 0 ? kMinor : minor;
+    const int cols = dim * (low + 1);
+    double row[4 * 26];  // cols <= 4 x (BSplCLib::MaxDegree() + 1)
+    const double* c = coeffs + major * cols;
+    for (int j = 0; j < cols; ++j) row[j] = c[j];
+    for (int i = 0; i < major; ++i) {
+      c -= cols;
+      for (int j = 0; j < cols; ++j) row[j] = row[j] * t_major + c[j];
+    }
+    const double* d = row + low * dim;
+    for (int j = 0; j < dim; ++j) r[j] = d[j];
+    for (int i = 0; i < low; ++i) {
+      d -= dim;
+      for (int j = 0; j < dim; ++j) r[j] = r[j] * t_minor + d[j];
+    }
+  }
+
   BSplCLib_CacheParams u_, v_;
   const int dimension_;  // 3, or 4 with the weight
+  void (*horner_)(const double*, int, int, int, double, double, double*) = Horner<0, 0>;
   TColStd_Array2OfReal coeffs_;
   bool built_ = false;
 };
@@ -361,10 +380,16 @@ class OcctSurface final : public Surface {
   // one, which moves there.
   Span& SpanOf(double u, double v) {
     ++clock_;
+    Span* last = last_;  // consecutive points mostly share a span: try the last one first
+    if (last && last->u0 <= u && u < last->u1 && last->v0 <= v && v < last->v1) {
+      last->last_use = clock_;
+      return *last;
+    }
     Span* oldest = &spans_[0];
     for (Span& span : spans_) {
       if (span.u0 <= u && u < span.u1 && span.v0 <= v && v < span.v1) {
         span.last_use = clock_;
+        last_ = &span;
         return span;
       }
       if (span.last_use < oldest->last_use) oldest = &span;
@@ -378,6 +403,7 @@ class OcctSurface final : public Surface {
     interval(uknots.at, u, &oldest->u0, &oldest->u1);
     interval(vknots.at, v, &oldest->v0, &oldest->v1);
     oldest->last_use = clock_;
+    last_ = oldest;
     return *oldest;
   }
 
@@ -390,6 +416,7 @@ class OcctSurface final : public Surface {
   std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
   Handle(Geom_BSplineSurface) bspline_;  // null unless B-spline
   std::vector<Span> spans_;              // empty unless B-spline
+  Span* last_ = nullptr;                 // the span slot SpanOf() returned last
   uint64_t clock_ = 0;
 };
 
