@@ -19,6 +19,7 @@
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <gp_Circ.hxx>
@@ -256,6 +257,18 @@ TEST(PipelineTest, CancelStopsTheRun) {
   Context context;
   context.Cancel();
   EXPECT_EQ(MeshModel(*model, MeshOptions(), &context).status().code(), StatusCode::kCancelled);
+}
+
+// A caller's deadline that passes before options.timeout_seconds ends the run as
+// kDeadlineExceeded: the engine's own timeout must not replace it with a later one.
+TEST(PipelineTest, CallersEarlierDeadlineWinsOverTimeoutSeconds) {
+  auto model = LoadData("nist_mbe_pmi_11.stp");
+  ASSERT_TRUE(model);
+  Context context;
+  context.SetDeadline(std::chrono::steady_clock::now() - std::chrono::milliseconds(1));
+  MeshOptions options;
+  options.timeout_seconds = 3600;
+  EXPECT_EQ(MeshModel(*model, options, &context).status().code(), StatusCode::kDeadlineExceeded);
 }
 
 }  // namespace
