@@ -3,6 +3,9 @@
 #include "model.h"
 
 #include <gtest/gtest.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <BRepBndLib.hxx>
@@ -22,8 +25,13 @@
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -295,7 +303,131 @@ TEST_F(ModelTest, BrokenReferencesAreRefused) {
               "broken STEP data");
 }
 
-// Files with a few bytes changed load or fail with a message; they never crash or hang.
+// What a function run in a child process came to.
+struct ChildRun {
+  std::string death;   // empty, or how the child died: a signal, the timeout, an exit code
+  std::string report;  // what the function returned, when the child lived
+};
+
+// Runs `work` in a forked child, as the service runs OCCT in worker processes: one file's OCCT
+// state cannot carry into the next load, and a crash or a hang becomes a failure that names the
+// file instead of taking the test binary down. The child sends work()'s string through a pipe;
+// it is killed when `timeout` passes.
+ChildRun RunInChild(const std::function<std::string()>& work, std::chrono::milliseconds timeout) {
+  ChildRun run;
+  int fds[2];
+  if (::pipe(fds) != 0) {
+    run.death = std::string("pipe: ") + std::strerror(errno);
+    return run;
+  }
+  std::fflush(nullptr);  // else the child's exit could flush the parent's buffered output again
+  pid_t pid = ::fork();
+  if (pid < 0) {
+    run.death = std::string("fork: ") + std::strerror(errno);
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return run;
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    std::string report = work();
+    for (size_t sent = 0; sent < report.size();) {
+      ssize_t n = ::write(fds[1], report.data() + sent, report.size() - sent);
+      if (n <= 0) ::_exit(3);
+      sent += static_cast<size_t>(n);
+    }
+    ::_exit(0);  // no atexit handlers or static destructors of the parent's state
+  }
+  ::close(fds[1]);
+  auto deadline = std::chrono::steady_clock::now() + timeout;
+  bool timed_out = false;
+  for (;;) {
+    auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd ready = {fds[0], POLLIN, 0};
+    if (::poll(&ready, 1, static_cast<int>(left.count())) <= 0) continue;  // EINTR or timeout
+    char buffer[4096];
+    ssize_t n = ::read(fds[0], buffer, sizeof(buffer));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;  // end of file: the child has finished
+    run.report.append(buffer, static_cast<size_t>(n));
+  }
+  ::close(fds[0]);
+  if (timed_out) ::kill(pid, SIGKILL);
+  int wait_status = 0;
+  while (::waitpid(pid, &wait_status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out) {
+    run.death = "timed out after " + std::to_string(timeout.count()) + " ms";
+  } else if (WIFSIGNALED(wait_status)) {
+    run.death = std::string("killed by signal ") + std::to_string(WTERMSIG(wait_status)) + " (" +
+                ::strsignal(WTERMSIG(wait_status)) + ")";
+  } else if (!WIFEXITED(wait_status) || WEXITSTATUS(wait_status) != 0) {
+    run.death = "exited with code " + std::to_string(WEXITSTATUS(wait_status));
+  }
+  return run;
+}
+
+TEST(RunInChildTest, ReportsResultCrashAndHang) {
+  ChildRun ok = RunInChild([] { return std::string("fine"); }, std::chrono::seconds(30));
+  EXPECT_EQ(ok.death, "");
+  EXPECT_EQ(ok.report, "fine");
+  ChildRun crash = RunInChild(
+      [] {
+        std::abort();  // SIGABRT: no sanitizer turns it into an exit code
+        return std::string("unreached");
+      },
+      std::chrono::seconds(30));
+  EXPECT_NE(crash.death.find("signal 6"), std::string::npos) << crash.death;
+  auto start = std::chrono::steady_clock::now();
+  ChildRun hang = RunInChild(
+      [] {
+        ::sleep(60);
+        return std::string("unreached");
+      },
+      std::chrono::milliseconds(300));
+  EXPECT_EQ(hang.death, "timed out after 300 ms");
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+}
+
+// LoadModel(path) in a child: "code faces\nmessage" from the child, parsed back.
+struct ChildLoad {
+  std::string death;
+  StatusCode code = StatusCode::kOk;
+  std::string message;
+  int faces = 0;
+};
+
+ChildLoad LoadInChild(const std::string& path) {
+  ChildRun run = RunInChild(
+      [&path] {
+        auto model = LoadModel(path);
+        return std::to_string(static_cast<int>(model.status().code())) + " " +
+               std::to_string(model.ok() ? (*model)->face_count() : 0) + "\n" +
+               model.status().message();
+      },
+      std::chrono::seconds(60));
+  ChildLoad load;
+  load.death = run.death;
+  if (!load.death.empty()) return load;
+  std::istringstream in(run.report);
+  int code = -1;
+  if (!(in >> code >> load.faces)) {
+    load.death = "no report from the child";
+    return load;
+  }
+  load.code = static_cast<StatusCode>(code);
+  in.get();  // the newline
+  std::getline(in, load.message, '\0');
+  return load;
+}
+
+// Files with a few bytes changed load or fail with a message; they never crash or hang. Each
+// file loads in its own child process (LoadInChild).
 TEST_F(ModelTest, MutatedFilesNeverCrash) {
   std::string iges_path = (dir_ / "box.igs").string();
   IGESControl_Writer writer("MM", 1);
@@ -318,17 +450,20 @@ TEST_F(ModelTest, MutatedFilesNeverCrash) {
       for (int c = 0; c < changes; ++c)
         bytes[500 + random() % (bytes.size() - 600)] = alphabet[random() % alphabet.size()];
       std::string name = "mutant_" + std::to_string(source) + "_" + std::to_string(trial);
-      auto model = LoadModel(Write(name + extensions[source], bytes));
-      if (model.ok()) {
+      ChildLoad load = LoadInChild(Write(name + extensions[source], bytes));
+      if (!load.death.empty()) {
+        ADD_FAILURE() << name << extensions[source] << ": " << load.death;
+        continue;
+      }
+      if (load.code == StatusCode::kOk) {
         ++loaded;
-        EXPECT_GT((*model)->face_count(), 0);
+        EXPECT_GT(load.faces, 0) << name;
         continue;
       }
       ++refused;
-      EXPECT_TRUE(model.status().code() == StatusCode::kParseError ||
-                  model.status().code() == StatusCode::kEmptyModel)
-          << model.status().ToString();
-      EXPECT_NE(model.status().message().find(name), std::string::npos);
+      EXPECT_TRUE(load.code == StatusCode::kParseError || load.code == StatusCode::kEmptyModel)
+          << name << ": " << StatusCodeName(load.code) << ": " << load.message;
+      EXPECT_NE(load.message.find(name), std::string::npos) << load.message;
     }
   }
   EXPECT_EQ(loaded + refused, 75);
