@@ -271,5 +271,55 @@ TEST(PipelineTest, CallersEarlierDeadlineWinsOverTimeoutSeconds) {
   EXPECT_EQ(MeshModel(*model, options, &context).status().code(), StatusCode::kDeadlineExceeded);
 }
 
+// Absurd options (a deviation, an RD tolerance or an edge length far below the model's size)
+// ask for more work than any deadline allows: the run stops within a second or so of it, in
+// whatever stage it is, as kDeadlineExceeded.
+struct AbsurdCase {
+  const char* name;
+  const char* file;
+  MeshOptions options;
+  double timeout;
+};
+
+MeshOptions Absurd(double deviation, double rd, double max_length, int threads) {
+  MeshOptions options;
+  options.max_deviation = deviation;
+  options.rd_tolerance = rd;
+  options.max_edge_length = max_length;
+  options.threads = threads;
+  return options;
+}
+
+class AbsurdOptionsTest : public ::testing::TestWithParam<AbsurdCase> {};
+
+TEST_P(AbsurdOptionsTest, StopsSoonAfterTheDeadline) {
+  const AbsurdCase& c = GetParam();
+  auto model = LoadData(c.file);
+  ASSERT_TRUE(model);
+  MeshOptions options = c.options;
+  options.timeout_seconds = c.timeout;
+  auto start = std::chrono::steady_clock::now();
+  auto result = MeshModel(*model, options);
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(result.status().code(), StatusCode::kDeadlineExceeded) << result.status().ToString();
+  EXPECT_GE(seconds, c.timeout * 0.99);
+  EXPECT_LT(seconds, c.timeout + 2.0)
+      << "stopped " << seconds - c.timeout << " s after the deadline";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Deadline, AbsurdOptionsTest,
+    ::testing::Values(
+        AbsurdCase{"deviation_1e_12", "axom_sliced_cylinder.step", Absurd(1e-12, 0, 0, 0), 1.0},
+        AbsurdCase{"deviation_1e_12_one_thread", "axom_sliced_cylinder.step",
+                   Absurd(1e-12, 0, 0, 1), 1.0},
+        AbsurdCase{"rd_1e_12", "axom_sliced_cylinder.step", Absurd(0, 1e-12, 0, 0), 1.0},
+        AbsurdCase{"max_edge_1e_9", "axom_sliced_cylinder.step", Absurd(0, 0, 1e-9, 0), 1.0},
+        // Late enough to reach the faces: the triangulation of ~10^5 boundary nodes and the
+        // collapse pass ran 88 s past this deadline before they polled the context.
+        AbsurdCase{"deviation_1e_12_in_faces", "axom_sliced_cylinder.step", Absurd(1e-12, 0, 0, 0),
+                   10.0}),
+    [](const auto& info) { return std::string(info.param.name); });
+
 }  // namespace
 }  // namespace rdmesh
