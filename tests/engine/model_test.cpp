@@ -2,9 +2,11 @@
 
 #include "model.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,12 +28,9 @@
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -303,42 +302,39 @@ TEST_F(ModelTest, BrokenReferencesAreRefused) {
               "broken STEP data");
 }
 
-// What a function run in a child process came to.
+// What a program run in a child process came to.
 struct ChildRun {
   std::string death;   // empty, or how the child died: a signal, the timeout, an exit code
-  std::string report;  // what the function returned, when the child lived
+  std::string output;  // its standard output
 };
 
-// Runs `work` in a forked child, as the service runs OCCT in worker processes: one file's OCCT
-// state cannot carry into the next load, and a crash or a hang becomes a failure that names the
-// file instead of taking the test binary down. The child sends work()'s string through a pipe;
-// it is killed when `timeout` passes.
-ChildRun RunInChild(const std::function<std::string()>& work, std::chrono::milliseconds timeout) {
+// Runs `argv` in a fresh process (posix_spawn, as the service starts its OCCT workers) with its
+// standard output read through a pipe and its standard error discarded; kills it when `timeout`
+// passes. A crash or a hang becomes a failure that names the file instead of taking the test
+// binary down.
+ChildRun RunProgram(const std::vector<std::string>& argv, std::chrono::milliseconds timeout) {
   ChildRun run;
   int fds[2];
-  if (::pipe(fds) != 0) {
+  if (::pipe2(fds, O_CLOEXEC) != 0) {
     run.death = std::string("pipe: ") + std::strerror(errno);
     return run;
   }
-  std::fflush(nullptr);  // else the child's exit could flush the parent's buffered output again
-  pid_t pid = ::fork();
-  if (pid < 0) {
-    run.death = std::string("fork: ") + std::strerror(errno);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  std::vector<char*> args;
+  for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = 0;
+  int spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(fds[1]);
+  if (spawned != 0) {
     ::close(fds[0]);
-    ::close(fds[1]);
+    run.death = "posix_spawn " + argv[0] + ": " + std::strerror(spawned);
     return run;
   }
-  if (pid == 0) {
-    ::close(fds[0]);
-    std::string report = work();
-    for (size_t sent = 0; sent < report.size();) {
-      ssize_t n = ::write(fds[1], report.data() + sent, report.size() - sent);
-      if (n <= 0) ::_exit(3);
-      sent += static_cast<size_t>(n);
-    }
-    ::_exit(0);  // no atexit handlers or static destructors of the parent's state
-  }
-  ::close(fds[1]);
   auto deadline = std::chrono::steady_clock::now() + timeout;
   bool timed_out = false;
   for (;;) {
@@ -354,7 +350,7 @@ ChildRun RunInChild(const std::function<std::string()>& work, std::chrono::milli
     ssize_t n = ::read(fds[0], buffer, sizeof(buffer));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) break;  // end of file: the child has finished
-    run.report.append(buffer, static_cast<size_t>(n));
+    run.output.append(buffer, static_cast<size_t>(n));
   }
   ::close(fds[0]);
   if (timed_out) ::kill(pid, SIGKILL);
@@ -372,29 +368,21 @@ ChildRun RunInChild(const std::function<std::string()>& work, std::chrono::milli
   return run;
 }
 
-TEST(RunInChildTest, ReportsResultCrashAndHang) {
-  ChildRun ok = RunInChild([] { return std::string("fine"); }, std::chrono::seconds(30));
+TEST(RunProgramTest, ReportsOutputCrashAndHang) {
+  ChildRun ok = RunProgram({"/bin/sh", "-c", "echo fine"}, std::chrono::seconds(30));
   EXPECT_EQ(ok.death, "");
-  EXPECT_EQ(ok.report, "fine");
-  ChildRun crash = RunInChild(
-      [] {
-        std::abort();  // SIGABRT: no sanitizer turns it into an exit code
-        return std::string("unreached");
-      },
-      std::chrono::seconds(30));
-  EXPECT_NE(crash.death.find("signal 6"), std::string::npos) << crash.death;
+  EXPECT_EQ(ok.output, "fine\n");
+  ChildRun crash = RunProgram({"/bin/sh", "-c", "kill -ABRT $$"}, std::chrono::seconds(30));
+  EXPECT_EQ(crash.death.rfind("killed by signal 6", 0), 0u) << crash.death;
+  ChildRun failed = RunProgram({"/bin/sh", "-c", "exit 3"}, std::chrono::seconds(30));
+  EXPECT_EQ(failed.death, "exited with code 3");
   auto start = std::chrono::steady_clock::now();
-  ChildRun hang = RunInChild(
-      [] {
-        ::sleep(60);
-        return std::string("unreached");
-      },
-      std::chrono::milliseconds(300));
+  ChildRun hang = RunProgram({"/bin/sh", "-c", "exec sleep 60"}, std::chrono::milliseconds(300));
   EXPECT_EQ(hang.death, "timed out after 300 ms");
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
 }
 
-// LoadModel(path) in a child: "code faces\nmessage" from the child, parsed back.
+// LoadModel(path) in a fresh process (load_model_child), its report parsed back.
 struct ChildLoad {
   std::string death;
   StatusCode code = StatusCode::kOk;
@@ -403,21 +391,14 @@ struct ChildLoad {
 };
 
 ChildLoad LoadInChild(const std::string& path) {
-  ChildRun run = RunInChild(
-      [&path] {
-        auto model = LoadModel(path);
-        return std::to_string(static_cast<int>(model.status().code())) + " " +
-               std::to_string(model.ok() ? (*model)->face_count() : 0) + "\n" +
-               model.status().message();
-      },
-      std::chrono::seconds(60));
+  ChildRun run = RunProgram({RDMESH_LOAD_MODEL_CHILD, path}, std::chrono::seconds(60));
   ChildLoad load;
   load.death = run.death;
   if (!load.death.empty()) return load;
-  std::istringstream in(run.report);
+  std::istringstream in(run.output);
   int code = -1;
   if (!(in >> code >> load.faces)) {
-    load.death = "no report from the child";
+    load.death = "no report from the child: '" + run.output + "'";
     return load;
   }
   load.code = static_cast<StatusCode>(code);
@@ -427,7 +408,10 @@ ChildLoad LoadInChild(const std::string& path) {
 }
 
 // Files with a few bytes changed load or fail with a message; they never crash or hang. Each
-// file loads in its own child process (LoadInChild).
+// file loads in a fresh process (LoadInChild): OCCT 7.6's STEP reader branches on uninitialised
+// memory for some of them (valgrind on mutant_1_19: StepData_StepReaderData::SetEntityNumbers),
+// so in a process whose heap holds earlier tests' data it could loop; a forked child inherits
+// that heap and looped too (1 of 50 runs).
 TEST_F(ModelTest, MutatedFilesNeverCrash) {
   std::string iges_path = (dir_ / "box.igs").string();
   IGESControl_Writer writer("MM", 1);
