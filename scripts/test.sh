@@ -53,7 +53,8 @@ run_sanitized() {
 # ASan + UBSan: every engine and server test. Leaks are checked; the suppressions name only
 # libraries (OCCT, TBB, gRPC/protobuf), never rdmesh code.
 sanitizer_build build-asan address
-export ASAN_OPTIONS="detect_leaks=1:strict_init_order=1:check_initialization_order=1"
+# fast_unwind_on_malloc=0: full allocation stacks through OCCT, for lsan.supp to match.
+export ASAN_OPTIONS="detect_leaks=1:fast_unwind_on_malloc=0:strict_init_order=1:check_initialization_order=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$sanitizers/ubsan.supp"
 export LSAN_OPTIONS="suppressions=$sanitizers/lsan.supp:print_suppressions=0"
 run_sanitized "ASan+UBSan engine_tests" build-asan/bin/engine_tests
