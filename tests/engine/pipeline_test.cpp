@@ -281,6 +281,9 @@ struct AbsurdCase {
   double timeout;
 };
 
+// ctest lists parameterised tests with their parameter: print the case's name, not its bytes.
+void PrintTo(const AbsurdCase& c, std::ostream* os) { *os << c.name; }
+
 MeshOptions Absurd(double deviation, double rd, double max_length, int threads) {
   MeshOptions options;
   options.max_deviation = deviation;
