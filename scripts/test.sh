@@ -5,7 +5,8 @@
 #   scripts/test.sh [ctest arguments...]
 #
 # Environment: BUILD_DIR (default build), JOBS (parallel build jobs, default: all cores),
-# RDMESH_SANITIZERS=0 skips the sanitizer build (CI runs it), RDMESH_TSAN=1 adds the TSan one.
+# RDMESH_SANITIZERS=0 skips the sanitizer build (CI runs it), RDMESH_TSAN=1 adds the TSan one,
+# RDMESH_FUZZ_SMOKE=0 skips the bounded fuzz run (CI runs it).
 #
 # After the Release tests, sanitizer builds of the engine and server tests run (gcc's runtimes;
 # options and suppressions in scripts/sanitizers/, see its README.md):
@@ -29,16 +30,22 @@ fi
 
 ctest --test-dir "$build" --output-on-failure --timeout 1500 "$@"
 
+# A bounded libFuzzer run on the model reader (clang, ASan+UBSan; fixed seed, build-fuzz/).
+if [ "${RDMESH_FUZZ_SMOKE:-1}" != 0 ]; then
+  bash scripts/fuzz_smoke.sh
+fi
+
 if [ "${RDMESH_SANITIZERS:-1}" = 0 ]; then
   echo "test.sh: sanitizer builds skipped (RDMESH_SANITIZERS=0)"
   exit 0
 fi
 sanitizers=$PWD/scripts/sanitizers
 
-# Builds the engine and server tests with -fsanitize=$2 in directory $1.
+# Builds the engine and server tests with -fsanitize=$2 in directory $1, at -O1 (the usual
+# sanitizer level: it compiles much faster than -O3, CGAL's templates above all).
 sanitizer_build() {
-  cmake -S . -B "$1" -G Ninja -DCMAKE_BUILD_TYPE=Release -DRDMESH_SANITIZE="$2" \
-    -DRDMESH_BUILD_BENCH=OFF > /dev/null
+  cmake -S . -B "$1" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O1 -DNDEBUG" \
+    -DRDMESH_SANITIZE="$2" -DRDMESH_BUILD_BENCH=OFF > /dev/null
   ninja -C "$1" -j"$jobs" engine_tests server_tests
 }
 
