@@ -17,6 +17,7 @@
 #include "mesh_flags.h"
 #include "progress.h"
 #include "rdmesh/engine.h"
+#include "rdmesh/format_names.h"
 #include "report.h"
 #ifdef RDMESH_WITH_REMOTE
 #include "remote_client.h"
@@ -198,20 +199,6 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   return kExitOk;
 }
 
-const char* ReaderName(const std::string& path) {
-  switch (FormatFromExtension(path)) {
-    case ModelFormat::kStep:
-      return "the STEP reader";
-    case ModelFormat::kIges:
-      return "the IGES reader";
-    case ModelFormat::kBrep:
-      return "the BREP reader";
-    case ModelFormat::kAuto:
-      break;
-  }
-  return "the model reader";
-}
-
 // The exit code and message for a run whose process died by a signal (see isolation.h).
 int ReportDeath(const CommonFlags& flags, const std::string& output, const ChildDeath& death) {
   bool writing = death.phase == Phase::kWriting;
@@ -229,8 +216,9 @@ int ReportDeath(const CommonFlags& flags, const std::string& output, const Child
   switch (death.phase) {
     case Phase::kLoading:
       return Fail(flags, kExitBadModel,
-                  Status(StatusCode::kParseError, "cannot read '" + file + "': " +
-                                                      ReaderName(file) + how + " on this model"));
+                  Status(StatusCode::kParseError,
+                         "cannot read '" + file + "': " + ReaderName(FormatFromExtension(file)) +
+                             how + " on this model"));
     case Phase::kMeshing:
       return Fail(flags, kExitMeshFailed,
                   Status(StatusCode::kInternal, "the mesher" + how + " on '" + file + "'"));
