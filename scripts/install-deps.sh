@@ -27,8 +27,9 @@ build_pkgs=(
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev python3-pytest
   clang-format
-  # The bounded libFuzzer run of scripts/test.sh (scripts/fuzz_smoke.sh): clang and its runtimes.
-  clang libclang-rt-14-dev
+  # The bounded libFuzzer run of scripts/test.sh (scripts/fuzz_smoke.sh): clang and its runtimes,
+  # gdb to read where a crash inside OCCT happened.
+  clang libclang-rt-14-dev gdb
   # Test-time imports and programs (tests/cli, tests/python).
   python3-gmsh openssl
 )

@@ -30,9 +30,10 @@ fi
 
 ctest --test-dir "$build" --output-on-failure --timeout 1500 "$@"
 
-# A bounded libFuzzer run on the model reader (clang, ASan+UBSan; fixed seed, build-fuzz/).
+# A bounded libFuzzer run on the model reader (clang, ASan+UBSan; fixed seeds, build-fuzz/):
+# 2000 inputs, at most 150 s. Crashes inside OCCT that the CLI survives are counted, not failed.
 if [ "${RDMESH_FUZZ_SMOKE:-1}" != 0 ]; then
-  bash scripts/fuzz_smoke.sh
+  RDMESH_CLI="$PWD/$build/bin/rdmesh" bash scripts/fuzz_smoke.sh 2000 150
 fi
 
 if [ "${RDMESH_SANITIZERS:-1}" = 0 ]; then

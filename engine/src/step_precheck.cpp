@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <string_view>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace rdmesh {
 
@@ -62,8 +63,9 @@ long FirstCycle(const std::unordered_map<long, long>& edge_element) {
 std::string Scan(std::string_view text, bool strings) {
   // edge_element of each ORIENTED_EDGE('name', *, *, #edge, .T.), by entity id.
   std::unordered_map<long, long> edge_element;
-  long oriented_edge = -1;  // the ORIENTED_EDGE whose arguments are being read
-  bool in_point = false;    // reading the arguments of a CARTESIAN_POINT
+  std::unordered_set<long> defined;  // every "#id =" instance name
+  long oriented_edge = -1;           // the ORIENTED_EDGE whose arguments are being read
+  bool in_point = false;             // reading the arguments of a CARTESIAN_POINT
   int argument = 0;
   size_t argument_start = 0;
   int depth = 0;
@@ -119,6 +121,7 @@ std::string Scan(std::string_view text, bool strings) {
       size_t digits_end = Skip(text, i + 1, IsDigit);
       size_t equals = Skip(text, digits_end, IsSpace);
       if (digits_end == i + 1 || equals >= text.size() || text[equals] != '=') continue;
+      defined.insert(EntityId(text.substr(i + 1, digits_end - i - 1)));
       size_t keyword = Skip(text, equals + 1, IsSpace);
       size_t keyword_end = Skip(text, keyword, IsKeyword);
       std::string_view name = text.substr(keyword, keyword_end - keyword);
@@ -128,9 +131,19 @@ std::string Scan(std::string_view text, bool strings) {
     }
   }
   long cycle = FirstCycle(edge_element);
-  if (cycle < 0) return "";
-  return "ORIENTED_EDGE #" + std::to_string(cycle) +
-         " is its own edge_element, directly or through other ORIENTED_EDGEs";
+  if (cycle >= 0) {
+    return "ORIENTED_EDGE #" + std::to_string(cycle) +
+           " is its own edge_element, directly or through other ORIENTED_EDGEs";
+  }
+  // The first (lowest) ORIENTED_EDGE whose edge_element is not defined, for a stable message.
+  long dangling = -1;
+  for (const auto& [id, target] : edge_element) {
+    if (defined.count(target) == 0 && (dangling < 0 || id < dangling)) dangling = id;
+  }
+  if (dangling < 0) return "";
+  return "ORIENTED_EDGE #" + std::to_string(dangling) + " names #" +
+         std::to_string(edge_element.at(dangling)) +
+         " as its edge_element, and the file does not define it";
 }
 
 }  // namespace

@@ -17,6 +17,10 @@ constexpr int kMaxStepNesting = 1000;
 /// - parentheses nested deeper than kMaxStepNesting (outside strings and comments);
 /// - an ORIENTED_EDGE whose edge_element is itself, or leads back to it through other
 ///   ORIENTED_EDGEs (StepShape_OrientedEdge::EdgeStart recurses along that chain for ever);
+/// - an ORIENTED_EDGE whose edge_element is not defined in the file (a truncated file): OCCT 7.6
+///   leaves such an unresolved reference as a record number (StepData_StepReaderData::
+///   SetEntityNumbers), which can land on an ORIENTED_EDGE and make the same endless recursion.
+///   Such a file could not transfer cleanly anyway: its edge is missing;
 /// - a CARTESIAN_POINT coordinate beyond the range of a double (1.E+999): OCCT takes it as
 ///   infinity, and ShapeFix_Edge::FixAddPCurve then dereferences a null curve in
 ///   GeomProjLib::ProjectOnPlane or searches for ever in Extrema_GenExtPS (tests/data/fuzz).

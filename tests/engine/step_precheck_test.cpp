@@ -57,6 +57,25 @@ TEST(StepPrecheckTest, RefusesOrientedEdgeCycles) {
             std::string::npos);
 }
 
+// Found by scripts/fuzz_smoke.sh: a file missing the lines of its EDGE_CURVEs (a part cut out,
+// the trailer kept). OCCT 7.6 keeps an unresolved reference as a record number, which can land on
+// an ORIENTED_EDGE: the same endless recursion as a cycle. Without the crash the model loaded with
+// an infinite bounding box. tests/data/fuzz/crash_reader_missing_edges.step is such a file.
+TEST(StepPrecheckTest, RefusesOrientedEdgeOfUndefinedEdge) {
+  std::string bytes = ReadBytes(fs::path(RDMESH_TEST_DATA) / "cq_red_cube_blue_cylinder.step");
+  const std::string edge = "#210 = EDGE_CURVE( '', #233, #234, #235, .T. );\n";
+  ASSERT_EQ(StepCrashReason(bytes), "");
+  size_t at = bytes.find(edge);
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_EQ(StepCrashReason(std::string(bytes).erase(at, edge.size())),
+            "ORIENTED_EDGE #146 names #210 as its edge_element, and the file does not define it");
+  // Defined further on, or as a complex instance: fine.
+  std::string moved = std::string(bytes).erase(at, edge.size());
+  moved.replace(moved.find("ENDSEC;", moved.find("DATA;")), 0,
+                "#210 = ( EDGE_CURVE( '', #233, #234, #235, .T. ) );\n");
+  EXPECT_EQ(StepCrashReason(moved), "");
+}
+
 TEST(StepPrecheckTest, RefusesAbsurdNesting) {
   const std::string loop = "#24=EDGE_LOOP('',(#29,#30,#31,#32));";
   auto nested = [&loop](int depth, const std::string& inner) {
