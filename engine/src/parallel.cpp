@@ -1,5 +1,7 @@
 #include "parallel.h"
 
+#include <memory>
+
 #if defined(__SANITIZE_THREAD__)
 #include <algorithm>
 #include <atomic>
@@ -20,10 +22,12 @@ struct ParallelRunner::Impl {
 };
 
 ParallelRunner::ParallelRunner(int threads)
-    : impl_(new Impl{threads > 0 ? threads
-                                 : std::max(1, static_cast<int>(std::thread::hardware_concurrency())))}) {}
+    : impl_(std::make_unique<Impl>(
+          Impl{threads > 0 ? threads
+                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()))})) {
+}
 
-ParallelRunner::~ParallelRunner() { delete impl_; }
+ParallelRunner::~ParallelRunner() = default;
 
 void ParallelRunner::For(int begin, int end, const std::function<void(int)>& body,
                          Partition) const {
@@ -42,13 +46,13 @@ void ParallelRunner::For(int begin, int end, const std::function<void(int)>& bod
 #else
 
 struct ParallelRunner::Impl {
+  explicit Impl(int threads) : arena(threads > 0 ? threads : tbb::task_arena::automatic) {}
   tbb::task_arena arena;
 };
 
-ParallelRunner::ParallelRunner(int threads)
-    : impl_(new Impl{tbb::task_arena(threads > 0 ? threads : tbb::task_arena::automatic)}) {}
+ParallelRunner::ParallelRunner(int threads) : impl_(std::make_unique<Impl>(threads)) {}
 
-ParallelRunner::~ParallelRunner() { delete impl_; }
+ParallelRunner::~ParallelRunner() = default;
 
 void ParallelRunner::For(int begin, int end, const std::function<void(int)>& body,
                          Partition partition) const {

@@ -5,6 +5,7 @@
 // the bodies run concurrently, so a race between them is a race in both.
 
 #include <functional>
+#include <memory>
 
 namespace rdmesh {
 
@@ -29,7 +30,7 @@ class ParallelRunner {
 
  private:
   struct Impl;
-  Impl* impl_;
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace rdmesh
