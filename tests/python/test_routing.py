@@ -110,14 +110,17 @@ class Nginx:
 
 
 def _models(tmp_path):
-    """Six models: the four bundled STEP files and two byte-level variants (a comment in the
-    header), which are other models to the content-addressed cache and to the hash ring."""
+    """Six models: the four bundled STEP files and two byte-level variants (comments in the
+    header), which are other models to the content-addressed cache and to the hash ring. The
+    second variant is 1.5 MiB, more than nginx's default client_max_body_size, and goes up in
+    two chunks."""
     models = [CUBE, CYLINDER, NIST, EIGHT_CYL]
-    for source in (CUBE, CYLINDER):
+    for source, lines in ((CUBE, 1), (CYLINDER, 25000)):
         variant = tmp_path / ("variant_" + source.name)
-        variant.write_bytes(source.read_bytes().replace(
-            b"HEADER;", b"HEADER;\n/* rdmesh routing test variant */", 1))
+        comments = b"/* rdmesh routing test variant, padding to pass 1 MiB ...... */\n" * lines
+        variant.write_bytes(source.read_bytes().replace(b"HEADER;", b"HEADER;\n" + comments, 1))
         models.append(variant)
+    assert models[-1].stat().st_size > 1.5 * (1 << 20)
     ids = [hashlib.sha256(m.read_bytes()).hexdigest() for m in models]
     assert len(set(ids)) == len(models)
     return models, ids
@@ -287,3 +290,24 @@ def test_nginx_routes_each_model_to_one_replica_and_fails_over(tmp_path,
         codes = [d.stop() for d in daemons]
         # Each replica but the killed one exits cleanly on SIGTERM.
         assert all(code in (0, -signal.SIGKILL) for code in codes), codes
+
+
+def _directives(path):
+    """The config's directives, comments and blank lines left out, `server host:port` lines
+    apart."""
+    lines = [line.split("#", 1)[0].strip() for line in path.read_text().splitlines()]
+    lines = [line for line in lines if line]
+    servers = [line for line in lines if re.match(r"server \S+:\d+", line)]
+    return [line for line in lines if line not in servers], servers
+
+
+def test_the_kubernetes_nginx_config_routes_like_the_tested_one():
+    tested, tested_servers = _directives(NGINX_CONF)
+    k8s, k8s_servers = _directives(REPO / "deploy" / "k8s" / "rdmesh-grpc.conf")
+    assert k8s == tested
+    assert len(tested_servers) == 3 and len(k8s_servers) == 3
+    # One line per StatefulSet pod, by its name under the headless Service.
+    statefulset = (REPO / "deploy" / "k8s" / "rdmeshd.yaml").read_text()
+    replicas = int(re.search(r"^  replicas: (\d+)", statefulset, re.M).group(1))
+    assert k8s_servers == ["server rdmeshd-%d.rdmeshd:50051 max_fails=1 fail_timeout=10s;" % i
+                           for i in range(replicas)]
