@@ -6,6 +6,8 @@ three rdmeshd replicas and nginx on loopback, configured as tests/python/test_ro
     /usr/bin/python3 bench/routing.py [--models A.step B.step] [--rounds 15] [--rel 1e-3]
 
 Per model:
+  - 20 Mesh calls by unknown ids through nginx: the NOT_FOUND round trip that a client's first
+    call for a new model costs before it uploads (printed as a line of its own);
   - first call through nginx: Mesh by id (NOT_FOUND), upload, parse, mesh; the parse's
     load_seconds is what a replica that does not hold the model pays;
   - then `--rounds` calls at `--rel` on the cached model, alternating direct to the replica that
@@ -21,6 +23,8 @@ import statistics
 import sys
 import tempfile
 import time
+
+import grpc
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "clients" / "python"))
@@ -52,6 +56,7 @@ def main():
     args = parser.parse_args()
 
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="routing-bench-"))
+    not_found = []
     print("models: %s; %d rounds at max_deviation_rel %g; logs in %s"
           % (", ".join(pathlib.Path(m).name for m in args.models), args.rounds, args.rel, tmp))
     print("| model | parse (load_seconds) | first call via nginx | cached: direct median / p90 "
@@ -67,6 +72,18 @@ def main():
             (tmp / ("run-%d" % k)).mkdir()
             nginx = Nginx(tmp / ("run-%d" % k), [d.address for d in daemons])
             routed = Client(nginx.address)
+            missing = []
+            for i in range(20):
+                start = time.monotonic()
+                try:
+                    for _ in routed.mesh_stream("%064x" % (i + 1)):
+                        pass
+                except grpc.RpcError as error:
+                    assert error.code() == grpc.StatusCode.NOT_FOUND, error
+                missing.append(time.monotonic() - start)
+            not_found.append("%s: NOT_FOUND round trip through nginx, median %.1f ms, p90 %.1f ms"
+                             % (pathlib.Path(model).name, 1000 * statistics.median(missing),
+                                1000 * p90(missing)))
             first_seconds, first = timed(lambda: routed.mesh(model, max_deviation_rel=args.rel))
             holder = daemons[_served_by(daemons, first.job_id)]
             # The holder's log line "model <id> '<name>' parsed: N bytes, F faces in S s".
@@ -96,6 +113,7 @@ def main():
                 nginx.stop()
             for d in daemons:
                 d.stop()
+    print("\n".join(not_found))
 
 
 if __name__ == "__main__":
