@@ -205,8 +205,12 @@ def test_nginx_routes_each_model_to_one_replica_and_fails_over(tmp_path,
             assert b.model.cached and b.model.load_seconds == 0, m.name
             assert _mesh_bytes(a) == single_daemon_results[(str(m), 0)], m.name
             assert _mesh_bytes(b) == single_daemon_results[(str(m), 1)], m.name
-        # One upload per model in the whole fleet: the second mesh found its model by id.
-        assert sum(_count(d, "UploadModel from") for d in daemons) == len(models)
+        # One NOT_FOUND and one upload per model in the whole fleet, on its replica: the second
+        # mesh found the model by id.
+        assert [_count(d, "is not in the cache") for d in daemons] == [
+            holders.count(i) for i in range(3)]
+        assert [_count(d, "UploadModel from") for d in daemons] == [
+            holders.count(i) for i in range(3)]
         assert len(set(holders)) > 1, "every model went to replica %d" % holders[0]
         # ... and each one where consistent hashing on its header puts it.
         assert holders == predicted
