@@ -3,7 +3,8 @@ the x-rdmesh-model header with consistent hashing, all on loopback.
 
 nginx runs the shipped deploy/nginx/rdmesh-grpc.conf with this test's own `server` and `listen`
 lines, as the current user, with every path in a temporary directory. scripts/install-deps.sh
-installs nginx; without it this test fails (it does not skip).
+installs nginx; without it this test fails (it does not skip). RDMESH_NGINX names another nginx
+binary.
 """
 
 import hashlib
@@ -214,6 +215,11 @@ def test_nginx_routes_each_model_to_one_replica_and_fails_over(tmp_path,
         assert len(set(holders)) > 1, "every model went to replica %d" % holders[0]
         # ... and each one where consistent hashing on its header puts it.
         assert holders == predicted
+        # GetModelInfo carries the header too.
+        infos_before = [_count(d, "GetModelInfo from") for d in daemons]
+        assert client.info(models[0]).cached
+        assert [_count(d, "GetModelInfo from") - n for d, n in zip(daemons, infos_before)] == [
+            int(i == holders[0]) for i in range(3)]
         print("models per replica:", [holders.count(i) for i in range(3)])
 
         # The header is what keeps a model on its replica: the same calls without it are spread
@@ -270,6 +276,16 @@ def test_nginx_routes_each_model_to_one_replica_and_fails_over(tmp_path,
         by_id = client.mesh(first[moved[0]].model, **FIRST)
         assert _served_by(daemons, by_id.job_id) != victim
         assert _mesh_bytes(by_id) == single_daemon_results[(str(models[moved[0]]), 0)]
+        # `rdmesh mesh --remote` on a moved model: NOT_FOUND on its new replica, upload, mesh;
+        # the file is the one a local run writes.
+        cli_moved = models[moved[-1]]
+        remote, local = tmp_path / "remote.msh", tmp_path / "local.msh"
+        for args in (["--remote", nginx.address], []):
+            run = subprocess.run([CLI, "mesh", str(cli_moved), "-o", str(remote if args else local),
+                                  "--max-deviation-rel", "1e-3", *args],
+                                 capture_output=True, text=True, timeout=120)
+            assert run.returncode == 0, run.stderr
+        assert remote.read_bytes() == local.read_bytes()
         for k, m in enumerate(models):
             for i, opts in enumerate((FIRST, SECOND)):
                 result = client.mesh(m, **opts)
