@@ -80,7 +80,8 @@ void ComputeFaceAreas(Model* model) {
   }
 }
 
-// `name` appears in messages, `display_name` in ModelInfo.
+}  // namespace
+
 Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
                                                 const std::string& name,
                                                 const std::string& display_name) {
@@ -109,6 +110,8 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
   model->info.unit_scale_mm = read.unit_scale_mm;
   return std::shared_ptr<const Model>(std::move(model));
 }
+
+namespace {
 
 Result<std::shared_ptr<const Model>> Load(const std::string& bytes, ModelFormat format,
                                           const std::string& path, const std::string& name,

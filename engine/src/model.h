@@ -54,4 +54,12 @@ class Model {
   const TopoDS_Edge& edge(int id) const;  ///< id 1..E
 };
 
+struct ReadShape;
+
+/// The Model of what a reader produced: ids, instancing, face areas, model info. `name` appears
+/// in messages, `display_name` in ModelInfo. kEmptyModel, or kParseError for invalid topology.
+Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
+                                                const std::string& name,
+                                                const std::string& display_name);
+
 }  // namespace rdmesh
