@@ -4,7 +4,12 @@
 #
 #   scripts/install-deps.sh            build + test + client dependencies (default)
 #   scripts/install-deps.sh --runtime  only what a built rdmeshd and the Python client need to run
-#   scripts/install-deps.sh --bench    also the benchmark peers (gmsh)
+#   scripts/install-deps.sh --bench    also the benchmark peers (the gmsh program)
+#
+# The default set holds everything that scripts/test.sh builds, imports or runs: the Python
+# modules the pytest suites import (gmsh, meshio, numpy, grpc, protobuf), the programs they call
+# (openssl, protoc with the Python gRPC plugin, node and npm for the glTF validator) and the
+# sanitizer runtimes of the ASan/UBSan and TSan builds (gcc's, pulled in by build-essential).
 set -euo pipefail
 
 mode=${1:-build}
@@ -22,19 +27,32 @@ build_pkgs=(
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev python3-pytest
   clang-format
+  # The bounded libFuzzer run of scripts/test.sh (scripts/fuzz_smoke.sh): clang and its runtimes,
+  # gdb to read where a crash inside OCCT happened.
+  clang libclang-rt-14-dev gdb
+  # Test-time imports and programs (tests/cli, tests/python).
+  python3-gmsh openssl
 )
-bench_pkgs=(gmsh python3-gmsh)
+# Programs the tests need that may come from elsewhere: the machine's own Node.js build ships
+# npm and conflicts with Debian's npm package, so these are installed only when the command is
+# missing (command:package).
+build_cmds=(node:nodejs npm:npm)
+bench_pkgs=(gmsh)
 
+cmds=()
 case "$mode" in
   --runtime) pkgs=("${runtime_pkgs[@]}") ;;
-  --bench) pkgs=("${runtime_pkgs[@]}" "${build_pkgs[@]}" "${bench_pkgs[@]}") ;;
-  build|--build) pkgs=("${runtime_pkgs[@]}" "${build_pkgs[@]}") ;;
+  --bench) pkgs=("${runtime_pkgs[@]}" "${build_pkgs[@]}" "${bench_pkgs[@]}"); cmds=("${build_cmds[@]}") ;;
+  build|--build) pkgs=("${runtime_pkgs[@]}" "${build_pkgs[@]}"); cmds=("${build_cmds[@]}") ;;
   *) echo "usage: $0 [--build|--runtime|--bench]" >&2; exit 2 ;;
 esac
 
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+for c in "${cmds[@]}"; do
+  command -v "${c%%:*}" > /dev/null || missing+=("${c#*:}")
 done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#pkgs[@]} packages present"

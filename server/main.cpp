@@ -67,12 +67,9 @@ int WorkerMain(int argc, char** argv) {
   return rdmesh::server::RunWorker(config);
 }
 
-/// This program's own path, to start workers from.
-std::string SelfPath() {
-  std::error_code error;
-  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
-  return error ? std::string() : self.string();
-}
+/// This program, to start workers from: /proc/self/exe is the very binary the daemon runs, even
+/// after an upgrade replaced the file on disk, so workers never run another version.
+std::string SelfPath() { return "/proc/self/exe"; }
 
 void LogFromGrpc(gpr_log_func_args* args) {
   spdlog::level::level_enum level = spdlog::level::info;

@@ -34,20 +34,6 @@ const char* Extension(ModelFormat format) {
 
 }  // namespace
 
-std::string ReaderName(ModelFormat format) {
-  switch (format) {
-    case ModelFormat::kStep:
-      return "the STEP reader";
-    case ModelFormat::kIges:
-      return "the IGES reader";
-    case ModelFormat::kBrep:
-      return "the BREP reader";
-    case ModelFormat::kAuto:
-      break;
-  }
-  return "the model reader";
-}
-
 ModelIndex::ModelIndex(std::string spool_dir, uint64_t limit_bytes)
     : spool_dir_(std::move(spool_dir)), limit_bytes_(limit_bytes) {}
 

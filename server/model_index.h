@@ -14,6 +14,7 @@
 #include <string>
 
 #include "rdmesh/engine.h"
+#include "rdmesh/format_names.h"
 #include "rdmesh/v1/rdmesh.pb.h"
 
 namespace rdmesh::server {
@@ -28,9 +29,6 @@ struct StoredModel {
   ::rdmesh::v1::ModelInfo info;  ///< from the first parse (model_id, file_bytes set)
   double load_seconds = 0.0;     ///< the first parse's time
 };
-
-/// "the STEP reader", "the IGES reader", "the BREP reader": what reads a format, for messages.
-std::string ReaderName(ModelFormat format);
 
 /// Content-addressed, bounded (file bytes), least-recently-used. The newest model is always kept.
 /// A model whose parse crashed its worker is remembered and refused at once afterwards, without

@@ -117,6 +117,7 @@ Result<std::shared_ptr<const StoredModel>> RdmeshService::Accept(
     call.set_request_id(log.id());
     FillModelFile(spooled, call.mutable_load()->mutable_model());
     std::optional<pb::ModelInfo> info;
+    active_parses_.fetch_add(1);
     const CallEnd end = CallWorker(
         worker.get(), pool_.settings(), call, ReaderName(spooled.format),
         [&info](const wire::FromWorker& reply) {
@@ -124,6 +125,7 @@ Result<std::shared_ptr<const StoredModel>> RdmeshService::Accept(
           return true;
         },
         [context] { return context->IsCancelled(); }, DeadlineOf(*context), log);
+    active_parses_.fetch_sub(1);
     if (end.worker_ok) {
       worker->Remember(spooled.id);
       pool_.Release(std::move(worker));
@@ -433,6 +435,7 @@ grpc::Status RdmeshService::GetServerStatus(grpc::ServerContext* context,
   response->set_max_workers(pool_.max_workers());
   response->set_workers_lost(pool_.lost());
   response->set_refused_models(index_.refused());
+  response->set_active_parses(active_parses_.load());
   for (pid_t pid : pool_.pids()) response->add_worker_pids(static_cast<int64_t>(pid));
   response->set_max_model_bytes(config_.max_model_bytes);
   response->set_max_triangles(config_.max_triangles);

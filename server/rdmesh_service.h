@@ -87,6 +87,7 @@ class RdmeshService final : public ::rdmesh::v1::Rdmesh::Service {
   WorkerPool pool_;
   JobLimiter limiter_;
   std::atomic<int> active_jobs_{0};
+  std::atomic<int> active_parses_{0};
   std::atomic<int64_t> jobs_completed_{0};
   std::atomic<bool> shutting_down_{false};
   const std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();

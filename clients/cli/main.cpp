@@ -13,9 +13,11 @@
 #include <string>
 
 #include "exit_codes.h"
+#include "isolation.h"
 #include "mesh_flags.h"
 #include "progress.h"
 #include "rdmesh/engine.h"
+#include "rdmesh/format_names.h"
 #include "report.h"
 #ifdef RDMESH_WITH_REMOTE
 #include "remote_client.h"
@@ -53,7 +55,11 @@ int Fail(const CommonFlags& flags, int code, const Status& status) {
     nlohmann::ordered_json error = {
         {"error", {{"code", StatusCodeName(status.code())}, {"message", status.message()}}},
         {"exit_code", code}};
-    std::cout << error.dump() << std::endl;
+    // Through C stdio: while OCCT reads, std::cout is muted (model_readers.cpp), and the watchdog
+    // may fail the run then.
+    std::string line = error.dump() + "\n";
+    std::fputs(line.c_str(), stdout);
+    std::fflush(stdout);
   }
   return code;
 }
@@ -127,10 +133,11 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   // The engine stops itself at the deadline; should a stage miss it, end the process anyway.
   Watchdog watchdog(options->timeout_seconds > 0 ? options->timeout_seconds + kWatchdogGrace : 0,
                     [&flags, &options] {
+                      const char* doing =
+                          CurrentPhase() == Phase::kLoading ? "loading '" : "meshing '";
                       Fail(flags, kExitStopped,
                            StopMessage(Status(StatusCode::kDeadlineExceeded, ""),
-                                       options->timeout_seconds, "meshing '" + flags.model + "'"));
-                      std::fflush(stdout);
+                                       options->timeout_seconds, doing + flags.model + "'"));
                       std::_Exit(kExitStopped);
                     });
   RunInfo run;
@@ -145,6 +152,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
     return Fail(flags, kExitBadModel, model.status());
   }
   ModelInfo info = GetModelInfo(**model);
+  EnterPhase(Phase::kMeshing);
   for (int id : options->face_ids)
     if (id > info.faces)
       return Fail(flags, kExitUsage,
@@ -172,8 +180,9 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
     return Fail(flags, kExitMeshFailed, result.status());
   }
 
+  EnterPhase(Phase::kWriting);
   auto write_start = std::chrono::steady_clock::now();
-  Status written = WriteMesh(**model, *result, output);
+  Status written = WriteMesh(**model, *result, output, mesh_flags.write);
   run.write_seconds = SecondsSince(write_start);
   if (!written.ok()) return Fail(flags, kExitWriteFailed, written);
 
@@ -188,6 +197,36 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
     return kExitMeshFailed;
   }
   return kExitOk;
+}
+
+// The exit code and message for a run whose process died by a signal (see isolation.h).
+int ReportDeath(const CommonFlags& flags, const std::string& output, const ChildDeath& death) {
+  bool writing = death.phase == Phase::kWriting;
+  const std::string& file = writing ? output : flags.model;
+  if (death.interrupted) {
+    const char* doing = death.phase == Phase::kLoading ? "loading"
+                        : writing                      ? "writing"
+                                                       : "meshing";
+    return Fail(flags, kExitStopped,
+                Status(StatusCode::kCancelled, std::string("interrupted while ") + doing + " '" +
+                                                   file + "' (" + SignalName(death.signal) + ")"));
+  }
+  std::string how =
+      (death.signal == SIGKILL ? " was killed (" : " crashed (") + SignalName(death.signal) + ")";
+  switch (death.phase) {
+    case Phase::kLoading:
+      return Fail(flags, kExitBadModel,
+                  Status(StatusCode::kParseError,
+                         "cannot read '" + file + "': " + ReaderName(FormatFromExtension(file)) +
+                             how + " on this model"));
+    case Phase::kMeshing:
+      return Fail(flags, kExitMeshFailed,
+                  Status(StatusCode::kInternal, "the mesher" + how + " on '" + file + "'"));
+    case Phase::kWriting:
+      break;
+  }
+  return Fail(flags, kExitWriteFailed,
+              Status(StatusCode::kInternal, "cannot write '" + file + "': the writer" + how));
 }
 
 void AddCommonFlags(CLI::App* command, CommonFlags* flags) {
@@ -207,6 +246,10 @@ int Main(int argc, char** argv) {
       "Exit codes: 0 ok, 1 meshing failed (or --strict and a face failed), 2 bad "
       "usage, 3 cannot read the model, 4 timeout or interrupted, 5 cannot write the "
       "output."};
+  app.footer(
+      "Each run happens in a child process, so that a crash inside OCCT is reported with exit "
+      "code 3 (reading), 1 (meshing) or 5 (writing); RDMESH_NO_FORK=1 runs in one process "
+      "(for debuggers).");
   app.require_subcommand(1);
 
   CommonFlags mesh_common;
@@ -239,9 +282,14 @@ int Main(int argc, char** argv) {
     return code == 0 ? kExitOk : kExitUsage;
   }
 
-  std::signal(SIGINT, OnInterrupt);
-  if (mesh->parsed()) return RunMeshCommand(mesh_common, mesh_flags, output, strict, remote);
-  return RunInfoCommand(info_common);
+  const CommonFlags& common = mesh->parsed() ? mesh_common : info_common;
+  return RunIsolated(
+      [&] {
+        std::signal(SIGINT, OnInterrupt);
+        if (mesh->parsed()) return RunMeshCommand(mesh_common, mesh_flags, output, strict, remote);
+        return RunInfoCommand(info_common);
+      },
+      [&](const ChildDeath& death) { return ReportDeath(common, output, death); });
 }
 
 }  // namespace rdmesh::cli

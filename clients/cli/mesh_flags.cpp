@@ -88,6 +88,15 @@ void AddMeshFlags(CLI::App* app, MeshFlags* flags) {
                   "0 = no limit")
       ->capture_default_str()
       ->group("Meshing");
+  app->add_flag("--edges,!--no-edges", flags->write.edges,
+                "Also write every B-rep edge as line elements along its shared edge grid "
+                "(.msh: type-1 lines on the edge's curve entity; .obj: `l` records in group "
+                "'edges'); default on")
+      ->group("Output");
+  app->add_flag("--msh-parametric", flags->write.msh_parametric,
+                ".msh: also write each node's curve parameter t or surface (u,v) (parametric "
+                "nodes; Gmsh reads them, meshio 5 does not)")
+      ->group("Output");
 }
 
 Result<std::vector<int>> ParseFaceList(const std::string& text) {

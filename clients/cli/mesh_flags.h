@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "rdmesh/engine.h"
 #include "rdmesh/options.h"
 #include "rdmesh/status.h"
 
@@ -14,12 +15,14 @@ namespace rdmesh::cli {
 /// Raw flag values as parsed; defaults are MeshOptions' defaults.
 struct MeshFlags {
   MeshOptions options;
-  std::string faces;  ///< "1,5,7" or ranges "2-9"; empty = all faces
+  std::string faces;   ///< "1,5,7" or ranges "2-9"; empty = all faces
+  WriteOptions write;  ///< how the output file is written
 };
 
 /// Adds --max-deviation, --max-deviation-rel, --rd-tolerance, --max-triangles,
-/// --min-edge-length, --max-edge-length, --nurbs, --threads, --faces and --timeout to `app`,
-/// each bound to `flags` and documented with its unit and default.
+/// --min-edge-length, --max-edge-length, --nurbs, --threads, --faces and --timeout, and the
+/// output flags --edges/--no-edges and --msh-parametric, to `app`, each bound to `flags` and
+/// documented with its unit and default.
 void AddMeshFlags(CLI::App* app, MeshFlags* flags);
 
 /// Parses a face list such as "1,5,7" or "2-4,9" into ascending unique ids (1-based).

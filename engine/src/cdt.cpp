@@ -63,20 +63,26 @@ void MarkDomains(Cdt& cdt) {
 
 Status ConstrainedTriangulation(const std::vector<Vec2>& points,
                                 const std::vector<std::array<int, 2>>& segments,
-                                CdtResult* result) {
+                                const Context* context, CdtResult* result) {
   result->triangles.clear();
   result->constrained.clear();
   try {
     Cdt cdt;
     std::vector<Cdt::Vertex_handle> handles(points.size());
+    // One insertion can flip a long fan (points in boundary order, many on one line or circle):
+    // poll often.
+    auto stop = [context](size_t i) { return (i & 15) == 15 && context && context->ShouldStop(); };
     for (size_t i = 0; i < points.size(); ++i) {
+      if (stop(i)) return context->StopStatus();
       size_t before = cdt.number_of_vertices();
       handles[i] = cdt.insert(Point(points[i].x, points[i].y));
       if (cdt.number_of_vertices() == before)
         return Status(StatusCode::kInternal, "two boundary nodes coincide in (u,v)");
       handles[i]->info() = static_cast<int>(i) + 1;
     }
-    for (const auto& s : segments) {
+    for (size_t k = 0; k < segments.size(); ++k) {
+      if (stop(k)) return context->StopStatus();
+      const auto& s = segments[k];
       if (s[0] == s[1]) continue;
       cdt.insert_constraint(handles[s[0]], handles[s[1]]);
     }

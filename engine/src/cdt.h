@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "geom.h"
+#include "rdmesh/context.h"
 #include "rdmesh/status.h"
 
 namespace rdmesh {
@@ -19,8 +20,9 @@ struct CdtResult {
 
 /// Triangulates the region bounded by `segments` (point index pairs; holes by the even-odd
 /// nesting rule). Points must be distinct; segments must not cross. Fails with a reason
-/// otherwise.
+/// otherwise, or with the context's stop status when it asks to stop (`context` may be null).
 Status ConstrainedTriangulation(const std::vector<Vec2>& points,
-                                const std::vector<std::array<int, 2>>& segments, CdtResult* result);
+                                const std::vector<std::array<int, 2>>& segments,
+                                const Context* context, CdtResult* result);
 
 }  // namespace rdmesh

@@ -11,8 +11,12 @@ int64_t NowNs() {
 }  // namespace
 
 void Context::SetDeadline(std::chrono::steady_clock::time_point deadline) {
-  deadline_ns_.store(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count());
+  int64_t ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count();
+  int64_t current = deadline_ns_.load();
+  // 0 means no deadline; otherwise keep the earlier one (retry if another thread set one).
+  while ((current == 0 || ns < current) && !deadline_ns_.compare_exchange_weak(current, ns)) {
+  }
 }
 
 void Context::SetTimeout(double seconds) {

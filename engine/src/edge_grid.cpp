@@ -77,9 +77,9 @@ struct Segment {
 };
 
 // Greedy RD refinement: split the worst segment at its best split point until every segment's
-// violation is at most `target`.
+// violation is at most `target`, or the context asks to stop.
 std::vector<Segment> Refine(Curve& curve, double first, double last, const EdgeGridCriteria& c,
-                            double target, int min_segments) {
+                            double target, int min_segments, const Context* context) {
   std::vector<Segment> segs;
   for (int i = 0; i < min_segments; ++i) {
     double a = first + (last - first) * i / min_segments;
@@ -94,6 +94,7 @@ std::vector<Segment> Refine(Curve& curve, double first, double last, const EdgeG
   while (!queue.empty() && static_cast<int>(segs.size()) < kMaxSegments) {
     int i = queue.top();
     if (segs[i].violation <= target) break;
+    if ((segs.size() & 255) == 0 && context && context->ShouldStop()) break;
     queue.pop();
     Segment s = segs[i];
     double t = s.m.split;
@@ -144,10 +145,11 @@ std::vector<double> Equidistribute(const std::vector<Segment>& fine, const EdgeG
 }  // namespace
 
 std::vector<double> DiscretizeCurve(Curve& curve, double first, double last,
-                                    const EdgeGridCriteria& criteria) {
+                                    const EdgeGridCriteria& criteria, const Context* context) {
   int min_segments = std::max(1, criteria.min_segments);
   // A fine grid (every segment at a quarter of the criteria) samples the error density.
-  std::vector<Segment> fine = Refine(curve, first, last, criteria, 0.25, min_segments);
+  std::vector<Segment> fine = Refine(curve, first, last, criteria, 0.25, min_segments, context);
+  if (context && context->ShouldStop()) return {first, last};
   double load = 0;
   for (const Segment& s : fine) {
     double f = SizeFactor(s.m, criteria);
@@ -160,6 +162,7 @@ std::vector<double> DiscretizeCurve(Curve& curve, double first, double last,
     std::vector<double> ts = Equidistribute(fine, criteria, n);
     bool ok = true;
     for (size_t k = 0; k + 1 < ts.size() && ok; ++k) {
+      if ((k & 255) == 255 && context && context->ShouldStop()) return {first, last};
       if (!(ts[k + 1] > ts[k]))
         ok = false;
       else

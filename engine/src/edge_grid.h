@@ -11,6 +11,7 @@
 #include <functional>
 #include <vector>
 
+#include "rdmesh/context.h"
 #include "surface.h"
 
 namespace rdmesh {
@@ -50,8 +51,10 @@ SegmentMeasure MeasureSegment(Curve& curve, double a, double b,
 /// How far a segment is from meeting the criteria: <= 1 means it meets them.
 double SegmentViolation(const SegmentMeasure& m, const EdgeGridCriteria& c);
 
-/// Parameters first = t0 < t1 < ... < tn = last of the optimised grid.
+/// Parameters first = t0 < t1 < ... < tn = last of the optimised grid. When `context` (may be
+/// null) asks to stop, returns early with a grid that is not to be used.
 std::vector<double> DiscretizeCurve(Curve& curve, double first, double last,
-                                    const EdgeGridCriteria& criteria);
+                                    const EdgeGridCriteria& criteria,
+                                    const Context* context = nullptr);
 
 }  // namespace rdmesh

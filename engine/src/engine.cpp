@@ -177,8 +177,15 @@ Result<MeshResult> MeshModel(const Model& model, const MeshOptions& options, Con
   if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
   double deviation = options.max_deviation > 0 ? options.max_deviation
                                                : options.max_deviation_rel * model.info.diagonal;
-  if (options.max_triangles > 0) return MeshWithinBudget(model, options, context);
-  return MeshAtDeviation(model, options, deviation, context);
+  Result<MeshResult> result = options.max_triangles > 0
+                                  ? MeshWithinBudget(model, options, context)
+                                  : MeshAtDeviation(model, options, deviation, context);
+  if (!result.ok()) return result;
+  Result<std::vector<EdgeLine>> edges =
+      BuildEdgeLines(model, result->mesh, options.sharp_edge_angle);
+  if (!edges.ok()) return edges.status();
+  result->edges = std::move(*edges);
+  return result;
 }
 
 }  // namespace rdmesh

@@ -264,7 +264,7 @@ Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGr
   return Status::Ok();
 }
 
-std::vector<DomainConflict> FindConflicts(const FaceDomain& d) {
+std::vector<DomainConflict> FindConflicts(const FaceDomain& d, const Context* context) {
   std::vector<DomainConflict> out;
   const int ns = static_cast<int>(d.segments.size());
   std::vector<Vec2> p(d.uv.size());
@@ -292,7 +292,10 @@ std::vector<DomainConflict> FindConflicts(const FaceDomain& d) {
   std::sort(order.begin(), order.end(), [&](int a, int b) { return lo(a) < lo(b); });
   auto seg_dist = [](Vec2 q, Vec2 a, Vec2 b) { return std::sqrt(SegmentDistance2(q, a, b)); };
   std::vector<int> active;
-  for (int s : order) {
+  for (int k = 0; k < ns; ++k) {
+    // Segments that share a u range (one edge along v) are all active at once: poll often.
+    if ((k & 63) == 63 && context && context->ShouldStop()) break;
+    const int s = order[k];
     const double x0 = lo(s);
     active.erase(
         std::remove_if(active.begin(), active.end(), [&](int t) { return hi(t) < x0 - eps; }),

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "geom.h"
+#include "rdmesh/context.h"
 #include "rdmesh/status.h"
 #include "surface.h"
 
@@ -68,8 +69,10 @@ struct DomainConflict {
 
 /// All conflicts of the domain's boundary segments, in scaled (u,v). Most come from edge grids
 /// too coarse for the face (a chord that cuts across a nearby loop); splitting the edge grid
-/// segments involved removes them.
-std::vector<DomainConflict> FindConflicts(const FaceDomain& domain);
+/// segments involved removes them. When `context` (may be null) asks to stop, returns early with
+/// the conflicts found so far.
+std::vector<DomainConflict> FindConflicts(const FaceDomain& domain,
+                                          const Context* context = nullptr);
 
 /// A sentence that names the edges of the first conflict, for failure reasons.
 std::string DescribeConflict(const FaceDomain& domain, const DomainConflict& conflict);

@@ -61,6 +61,13 @@ void Extract(const WorkMesh& m, bool reversed, FaceMesh* f, std::vector<NodeRef>
   }
 }
 
+// A face left unmeshed because the run was asked to stop (the run's status says why).
+FaceMesh Stopped(FaceMesh f, const Context& context) {
+  f = Failed(std::move(f), context.StopStatus().message());
+  f.status = FaceStatus::kSkipped;
+  return f;
+}
+
 }  // namespace
 
 FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
@@ -77,7 +84,9 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     FaceDomain domain;
     Status st = BuildFaceDomain(model, face_id, grids, *surface, &domain);
     if (!st.ok()) return Failed(f, st.message());
-    std::vector<DomainConflict> conflicts = FindConflicts(domain);
+    if (context && context->ShouldStop()) return Stopped(f, *context);
+    std::vector<DomainConflict> conflicts = FindConflicts(domain, context);
+    if (context && context->ShouldStop()) return Stopped(f, *context);
     if (!conflicts.empty()) return Failed(f, DescribeConflict(domain, conflicts.front()));
     std::vector<Vec2> seeds = SeedPoints(domain, *surface);
     // Constrained triangulation in scaled (u,v).
@@ -85,7 +94,8 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     for (const Vec2& p : domain.uv) points.push_back({p.x * domain.scale_u, p.y * domain.scale_v});
     for (const Vec2& p : seeds) points.push_back({p.x * domain.scale_u, p.y * domain.scale_v});
     CdtResult cdt;
-    st = ConstrainedTriangulation(points, domain.segments, &cdt);
+    st = ConstrainedTriangulation(points, domain.segments, context, &cdt);
+    if (context && context->ShouldStop()) return Stopped(f, *context);
     if (!st.ok()) return Failed(f, st.message());
     WorkMesh m;
     for (size_t i = 0; i < domain.uv.size(); ++i) {

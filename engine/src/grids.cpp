@@ -202,7 +202,7 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
           bool loops = g.first_vertex == g.last_vertex || Dist(start, end) < 0.5 * Dist(start, mid);
           c.min_segments = loops ? 3 : 1;
           c.sides = NarrowSides(model, edge, edge_faces.Seek(model.edge(e)), narrow, c.max_sagitta);
-          g.t = DiscretizeCurve(*curve, f, l, c);
+          g.t = DiscretizeCurve(*curve, f, l, c, context);
           // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
           // and faces see it as a pole segment (its pcurve may still span the face).
           if (PolylineLength(*curve, f, l, kLengthSamples) <= BRep_Tool::Tolerance(edge))
@@ -224,7 +224,10 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
       if (context && context->ShouldStop()) return;
       build(sources[i], true);
     });
-    tbb::parallel_for(0, static_cast<int>(copies.size()), [&](int i) { build(copies[i], false); });
+    tbb::parallel_for(0, static_cast<int>(copies.size()), [&](int i) {
+      if (context && context->ShouldStop()) return;
+      build(copies[i], false);
+    });
   });
   if (context && context->ShouldStop()) return context->StopStatus();
   MergeCollapsedEdgeVertices(model, grids);

@@ -22,13 +22,14 @@ constexpr int kMaxRounds = 12;
 
 // Grid segments [t[k], t[k+1]] to split, as (edge id, k), for the conflicts of one face.
 std::vector<std::pair<int, int>> SplitsForFace(const Model& model, int face_id,
-                                               const std::vector<EdgeGrid>& grids, bool nurbs) {
+                                               const std::vector<EdgeGrid>& grids, bool nurbs,
+                                               const Context* context) {
   std::vector<std::pair<int, int>> splits;
   try {
     std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), nurbs);
     FaceDomain domain;
     if (!BuildFaceDomain(model, face_id, grids, *surface, &domain).ok()) return splits;
-    for (const DomainConflict& c : FindConflicts(domain)) {
+    for (const DomainConflict& c : FindConflicts(domain, context)) {
       for (int s : {c.a, c.b}) {
         if (s < 0 || domain.segment_edge[s] == 0 || domain.segment_splittable[s]) continue;
         splits.push_back({domain.segment_edge[s], domain.segment_grid_index[s]});
@@ -68,9 +69,11 @@ Status HealEdgeGrids(const Model& model, const std::vector<int>& faces, bool nur
     std::vector<std::vector<std::pair<int, int>>> found(todo.size());
     arena.execute([&] {
       tbb::parallel_for(0, static_cast<int>(todo.size()), [&](int i) {
-        found[i] = SplitsForFace(model, faces[todo[i]], *grids, nurbs);
+        if (context && context->ShouldStop()) return;
+        found[i] = SplitsForFace(model, faces[todo[i]], *grids, nurbs, context);
       });
     });
+    if (context && context->ShouldStop()) return context->StopStatus();
     ++stats->rounds;
     // (TShape's first edge id, k), split from the largest k down so indices stay valid.
     std::set<std::pair<int, int>, std::greater<>> splits;

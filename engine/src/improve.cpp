@@ -108,8 +108,10 @@ int Refiner::CollapsePass() {
   using Entry = std::tuple<double, int, uint32_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
   CollapseChoice choice;
-  for (int v = 0; v < m_.node_count(); ++v)
+  for (int v = 0; v < m_.node_count(); ++v) {
+    if ((v & 255) == 255 && ctx_ && ctx_->ShouldStop()) return count;
     if (BestCollapse(v, &choice, kCollapseSlack)) queue.push({choice.cand.max_violation, v, 0});
+  }
   int64_t ops = 0;
   while (!queue.empty()) {
     auto [cost, v, stamp] = queue.top();
@@ -140,6 +142,7 @@ int Refiner::CollapsePass() {
 int Refiner::FlipPass() {
   int count = 0;
   for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
+    if ((t & 255) == 255 && ctx_ && ctx_->ShouldStop()) break;
     if (!m_.alive[t]) continue;
     for (int i = 0; i < 3; ++i) {
       if (!m_.alive[t]) break;

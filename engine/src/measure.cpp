@@ -91,6 +91,8 @@ int KnotsWithin(const Surface::KnotLines& k, double lo, double hi, double* at) {
   }
   for (double shift = first; shift <= last; ++shift) {
     double offset = shift * k.period;
+    // A copy of the knots wholly at or below lo, or at or above hi, adds none: skip its search.
+    if (k.at.back() <= lo - offset || k.at.front() + offset >= hi) continue;
     auto it = std::upper_bound(k.at.begin(), k.at.end(), lo - offset);
     for (; it != k.at.end() && *it + offset < hi; ++it) {
       if (n > kMaxKnots) return n;

@@ -12,10 +12,6 @@
 
 namespace rdmesh {
 
-/// The format named by a path's extension (.step/.stp, .iges/.igs, .brep/.brp, any case), or
-/// kAuto when the extension is none of these.
-ModelFormat FormatFromExtension(const std::string& path);
-
 /// The format recognised from a file's first bytes, or kAuto when none matches: STEP starts with
 /// "ISO-10303-21", BREP holds "CASCADE Topology" near its start, IGES has 80-column lines with
 /// 'S' in column 73.
@@ -41,5 +37,10 @@ TopoDS_Shape FreeShapesCompound(const Handle(TDocStd_Document) & doc);
 Result<ReadShape> ReadModelBytes(const std::string& bytes, ModelFormat format,
                                  const std::string& path, const std::string& name,
                                  const Context* context);
+
+/// The checks ReadModelBytes makes on STEP bytes before OCCT transfers them: the text scan of
+/// step_precheck.h, then OCCT's parser and its complaints about references. Parses, does not
+/// transfer. Ok, or the kParseError ReadModelBytes would return. For tests over many files.
+Status CheckStepBytes(const std::string& bytes, const std::string& name);
 
 }  // namespace rdmesh

@@ -1,3 +1,4 @@
+#include "rdmesh/format_names.h"
 #include "rdmesh/mesh.h"
 
 namespace rdmesh {
@@ -40,6 +41,20 @@ const char* FaceStatusName(FaceStatus status) {
       return "skipped";
   }
   return "unknown";
+}
+
+const char* ReaderName(ModelFormat format) {
+  switch (format) {
+    case ModelFormat::kStep:
+      return "the STEP reader";
+    case ModelFormat::kIges:
+      return "the IGES reader";
+    case ModelFormat::kBrep:
+      return "the BREP reader";
+    case ModelFormat::kAuto:
+      break;
+  }
+  return "the model reader";
 }
 
 }  // namespace rdmesh

@@ -30,6 +30,8 @@ Status ValidateOptions(const MeshOptions& o) {
   if (o.threads < 0 || o.threads > 1024) return Invalid("threads must lie in [0, 1024]");
   if (!Finite(o.timeout_seconds) || o.timeout_seconds < 0)
     return Invalid("timeout_seconds must be >= 0");
+  if (!Finite(o.sharp_edge_angle) || o.sharp_edge_angle < 0 || o.sharp_edge_angle > 180)
+    return Invalid("sharp_edge_angle must lie in [0, 180] degrees");
   for (int id : o.face_ids)
     if (id < 1) return Invalid("face ids start at 1");
   if (o.max_deviation == 0 && o.max_deviation_rel == 0 && o.rd_tolerance == 0 &&

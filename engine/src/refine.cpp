@@ -31,6 +31,7 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
   gen_.assign(m_.tri.size(), 0);
   refining_ = true;
   for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
+    if ((t & 255) == 255 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
     if (!m_.alive[t]) continue;
     Vec2 uv[3];
     Vec3 p[3];

@@ -3,16 +3,22 @@
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Tool.hxx>
+#include <BSplCLib_CacheParams.hxx>
+#include <BSplSLib.hxx>
 #include <GeomAdaptor_Surface.hxx>
 #include <GeomConvert.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
+#include <TColStd_Array2OfReal.hxx>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <gp_Cone.hxx>
+#include <gp_Cylinder.hxx>
+#include <gp_Pln.hxx>
 #include <gp_Pnt.hxx>
 #include <gp_Sphere.hxx>
 #include <gp_Vec.hxx>
@@ -134,36 +140,160 @@ class CircleCurve final : public Curve {
 
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 
+// S(u,v) of a B-spline surface on one knot span, computed as OCCT's adaptor does it, bit for bit:
+// BSplSLib_Cache's Taylor coefficients of the span (built by BSplSLib::BuildCache for the span
+// its parameters locate), evaluated by Horner's rule along the direction of higher degree, then
+// the other (BSplSLib_Cache::D0 with PLib::NoDerivativeEvalPolynomial). Without the adaptor's
+// dispatch, its cache handle and the library's general polynomial loops.
+class SpanPolynomial {
+ public:
+  explicit SpanPolynomial(const Geom_BSplineSurface& s)
+      : u_(s.UDegree(), s.IsUPeriodic(), s.UKnotSequence()),
+        v_(s.VDegree(), s.IsVPeriodic(), s.VKnotSequence()),
+        dimension_(s.Weights() ? 4 : 3),
+        coeffs_(1, std::max(u_.Degree, v_.Degree) + 1, 1,
+                dimension_ * (std::min(u_.Degree, v_.Degree) + 1)) {
+    const int minor = std::min(u_.Degree, v_.Degree);
+    if (minor >= 1 && minor <= 3) {
+      using Fn = decltype(horner_);
+      static constexpr Fn kFixed[2][3] = {{Horner<3, 1>, Horner<3, 2>, Horner<3, 3>},
+                                          {Horner<4, 1>, Horner<4, 2>, Horner<4, 3>}};
+      horner_ = kFixed[dimension_ - 3][minor - 1];
+    }
+  }
+
+  Vec3 Value(const Geom_BSplineSurface& s, double u, double v) {
+    if (!built_ || !u_.IsCacheValid(u) || !v_.IsCacheValid(v)) Build(s, u, v);
+    // Parameters local to the span: BSplSLib centres it, with half its length as unit.
+    double half_u = 0.5 * u_.SpanLength, start_u = u_.SpanStart + half_u;
+    double half_v = 0.5 * v_.SpanLength, start_v = v_.SpanStart + half_v;
+    double lu = (u_.PeriodicNormalization(u) - start_u) / half_u;
+    double lv = (v_.PeriodicNormalization(v) - start_v) / half_v;
+    const bool u_major = u_.Degree > v_.Degree;
+    const int major = u_major ? u_.Degree : v_.Degree, minor = u_major ? v_.Degree : u_.Degree;
+    double r[4];
+    horner_(&coeffs_(1, 1), major, minor, dimension_, u_major ? lu : lv, u_major ? lv : lu, r);
+    if (dimension_ == 4) r[0] /= r[3], r[1] /= r[3], r[2] /= r[3];
+    return {r[0], r[1], r[2]};
+  }
+
+ private:
+  // BSplSLib_Cache::BuildCache.
+  void Build(const Geom_BSplineSurface& s, double u, double v) {
+    double nu = u_.PeriodicNormalization(u), nv = v_.PeriodicNormalization(v);
+    u_.LocateParameter(nu, s.UKnotSequence());
+    v_.LocateParameter(nv, s.VKnotSequence());
+    double half_u = 0.5 * u_.SpanLength, half_v = 0.5 * v_.SpanLength;
+    BSplSLib::BuildCache(u_.SpanStart + half_u, v_.SpanStart + half_v, half_u, half_v,
+                         u_.IsPeriodic, v_.IsPeriodic, u_.Degree, v_.Degree, u_.SpanIndex,
+                         v_.SpanIndex, s.UKnotSequence(), s.VKnotSequence(), s.Poles(), s.Weights(),
+                         coeffs_);
+    built_ = true;
+  }
+
+  // The span's polynomial at (t_major, t_minor) into r[0..dimension): Horner's rule along the
+  // direction of higher degree `major` for each of the coefficient rows' columns, then along the
+  // other (PLib::NoDerivativeEvalPolynomial twice). kDim and kMinor > 0 fix the row length, so
+  // that the compiler unrolls the columns; the arithmetic per column is the same.
+  template <int kDim, int kMinor>
+  static void Horner(const double* coeffs, int major, int minor, int dimension, double t_major,
+                     double t_minor, double r[4]) {
+    const int dim = kMinor > 0 ? kDim : dimension, low = kMinor > 0 ? kMinor : minor;
+    const int cols = dim * (low + 1);
+    double row[4 * 26];  // cols <= 4 x (BSplCLib::MaxDegree() + 1)
+    const double* c = coeffs + major * cols;
+    for (int j = 0; j < cols; ++j) row[j] = c[j];
+    for (int i = 0; i < major; ++i) {
+      c -= cols;
+      for (int j = 0; j < cols; ++j) row[j] = row[j] * t_major + c[j];
+    }
+    const double* d = row + low * dim;
+    for (int j = 0; j < dim; ++j) r[j] = d[j];
+    for (int i = 0; i < low; ++i) {
+      d -= dim;
+      for (int j = 0; j < dim; ++j) r[j] = r[j] * t_minor + d[j];
+    }
+  }
+
+  BSplCLib_CacheParams u_, v_;
+  const int dimension_;  // 3, or 4 with the weight
+  void (*horner_)(const double*, int, int, int, double, double, double*) = Horner<0, 0>;
+  TColStd_Array2OfReal coeffs_;
+  bool built_ = false;
+};
+
 // OCCT evaluator, with two speed-ups that keep OCCT's values bit for bit. A B-spline adaptor
 // evaluates through a polynomial cache of one knot span and rebuilds it whenever a point falls in
 // another span, which refinement does all the time (a triangle's samples straddle knot lines).
 // So B-splines get a few adaptors, each kept on the span it last served; the cache content
-// depends only on the span, so the values are the same. Spheres skip the adaptor's dispatch.
+// depends only on the span, so the values are the same. Planes, cylinders, cones and spheres
+// skip the adaptor's dispatch.
 class OcctSurface final : public Surface {
  public:
   explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {
-    if (adaptor_.GetType() == GeomAbs_Sphere) {
-      gp_Sphere sphere = adaptor_.Sphere();
-      const gp_Ax3& pos = sphere.Position();
-      sphere_ = {pos.XDirection().XYZ(), pos.YDirection().XYZ(), pos.Direction().XYZ(),
-                 pos.Location().XYZ()};
-      radius_ = sphere.Radius();
-      is_sphere_ = true;
-      u_trig_.resize(size_t{1} << kTrigBits);
-      v_trig_.resize(size_t{1} << kTrigBits);
+    auto frame = [&](const gp_Ax3& pos) {
+      frame_ = {pos.XDirection().XYZ(), pos.YDirection().XYZ(), pos.Direction().XYZ(),
+                pos.Location().XYZ()};
+    };
+    switch (adaptor_.GetType()) {
+      case GeomAbs_Plane:
+        frame(adaptor_.Plane().Position());
+        kind_ = Kind::kPlane;
+        break;
+      case GeomAbs_Cylinder:
+        frame(adaptor_.Cylinder().Position());
+        radius_ = adaptor_.Cylinder().Radius();
+        kind_ = Kind::kCylinder;
+        break;
+      case GeomAbs_Cone: {
+        gp_Cone cone = adaptor_.Cone();
+        frame(cone.Position());
+        radius_ = cone.RefRadius();
+        // ElSLib::ConeD0 takes the sine and cosine of the semi-angle at every call: the same
+        // values each time.
+        cone_sin_ = std::sin(cone.SemiAngle());
+        cone_cos_ = std::cos(cone.SemiAngle());
+        kind_ = Kind::kCone;
+        break;
+      }
+      case GeomAbs_Sphere:
+        frame(adaptor_.Sphere().Position());
+        radius_ = adaptor_.Sphere().Radius();
+        kind_ = Kind::kSphere;
+        v_trig_.resize(size_t{1} << kTrigBits);
+        break;
+      default:
+        break;
     }
+    if (kind_ != Kind::kPlane && kind_ != Kind::kOther) u_trig_.resize(size_t{1} << kTrigBits);
     if (adaptor_.GetType() != GeomAbs_BSplineSurface) return;
     Handle(Geom_BSplineSurface) bspline = adaptor_.BSpline();
     for (int i = 1; i <= bspline->NbUKnots(); ++i) uknots.at.push_back(bspline->UKnot(i));
     for (int i = 1; i <= bspline->NbVKnots(); ++i) vknots.at.push_back(bspline->VKnot(i));
     if (bspline->IsUPeriodic()) uknots.period = uknots.at.back() - uknots.at.front();
     if (bspline->IsVPeriodic()) vknots.period = vknots.at.back() - vknots.at.front();
+    bspline_ = bspline;
     spans_.resize(kSpans);
-    for (Span& span : spans_) span.adaptor.Load(surface);
+    for (Span& span : spans_) {
+      span.adaptor.Load(surface);
+      span.polynomial = std::make_unique<SpanPolynomial>(*bspline);
+    }
   }
   Vec3 Point(double u, double v) override {
-    if (is_sphere_) return SpherePoint(u, v);
-    return ToVec(Adaptor(u, v).Value(u, v));
+    switch (kind_) {
+      case Kind::kPlane:
+        return PlanePoint(u, v);
+      case Kind::kCylinder:
+        return CylinderPoint(u, v);
+      case Kind::kCone:
+        return ConePoint(u, v);
+      case Kind::kSphere:
+        return SpherePoint(u, v);
+      case Kind::kOther:
+        break;
+    }
+    if (!spans_.empty()) return SpanOf(u, v).polynomial->Value(*bspline_, u, v);
+    return ToVec(adaptor_.Value(u, v));
   }
   Vec3 Normal(double u, double v) override {
     gp_Pnt p;
@@ -179,21 +309,45 @@ class OcctSurface final : public Surface {
   }
 
  private:
-  // OCCT's sphere evaluation (ElSLib::SphereD0) without the adaptor's dispatch: the same
-  // arithmetic in the same order, so the same bits (surface_test checks it). The cosine and sine
-  // of each parameter come from a small table: refinement's probes often share one of u, v
-  // (a smoothing probe that moves along u keeps the v of every sample around it).
+  // OCCT's evaluations of the elementary surfaces (ElSLib::PlaneD0, CylinderD0, ConeD0,
+  // SphereD0) without the adaptor's dispatch: the same arithmetic in the same order, so the same
+  // bits (surface_test checks it). The cosine and sine of each angle parameter come from a small
+  // table: refinement's probes often share one of u, v (a smoothing probe that moves along u
+  // keeps the v of every sample around it).
+  Vec3 PlanePoint(double u, double v) const {
+    const gp_XYZ &x = frame_[0], &y = frame_[1], &o = frame_[3];
+    return {u * x.X() + v * y.X() + o.X(), u * x.Y() + v * y.Y() + o.Y(),
+            u * x.Z() + v * y.Z() + o.Z()};
+  }
+  // a1 x + a2 y + a3 z + o, summed left to right as ElSLib does.
+  Vec3 InFrame(double a1, double a2, double a3) const {
+    const gp_XYZ &x = frame_[0], &y = frame_[1], &z = frame_[2], &o = frame_[3];
+    return {a1 * x.X() + a2 * y.X() + a3 * z.X() + o.X(),
+            a1 * x.Y() + a2 * y.Y() + a3 * z.Y() + o.Y(),
+            a1 * x.Z() + a2 * y.Z() + a3 * z.Z() + o.Z()};
+  }
+  Vec3 CylinderPoint(double u, double v) {
+    const CosSin& cu = Trig(u, u_trig_);
+    double a1 = radius_ * cu.cos;
+    double a2 = radius_ * cu.sin;
+    return InFrame(a1, a2, v);
+  }
+  Vec3 ConePoint(double u, double v) {
+    const CosSin& cu = Trig(u, u_trig_);
+    double r = radius_ + v * cone_sin_;
+    double a3 = v * cone_cos_;
+    double a1 = r * cu.cos;
+    double a2 = r * cu.sin;
+    return InFrame(a1, a2, a3);
+  }
   Vec3 SpherePoint(double u, double v) {
-    const gp_XYZ &x = sphere_[0], &y = sphere_[1], &z = sphere_[2], &o = sphere_[3];
     const CosSin& cv = Trig(v, v_trig_);
     const CosSin& cu = Trig(u, u_trig_);
     double r = radius_ * cv.cos;
     double a3 = radius_ * cv.sin;
     double a1 = r * cu.cos;
     double a2 = r * cu.sin;
-    return {a1 * x.X() + a2 * y.X() + a3 * z.X() + o.X(),
-            a1 * x.Y() + a2 * y.Y() + a3 * z.Y() + o.Y(),
-            a1 * x.Z() + a2 * y.Z() + a3 * z.Z() + o.Z()};
+    return InFrame(a1, a2, a3);
   }
 
   // std::cos(t), std::sin(t), remembered by the bits of t in a direct-mapped table.
@@ -215,18 +369,28 @@ class OcctSurface final : public Surface {
   struct Span {
     double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // its knot span: [u0, u1) x [v0, v1)
     uint64_t last_use = 0;
-    GeomAdaptor_Surface adaptor;
+    GeomAdaptor_Surface adaptor;                 // for normals
+    std::unique_ptr<SpanPolynomial> polynomial;  // for points
   };
-  // The adaptor to evaluate (u, v) with: for a B-spline the one on its knot span, else the
-  // least recently used one, which moves there.
+  // The adaptor to evaluate (u, v) with: for a B-spline its span's.
   const GeomAdaptor_Surface& Adaptor(double u, double v) {
-    if (spans_.empty()) return adaptor_;
+    return spans_.empty() ? adaptor_ : SpanOf(u, v).adaptor;
+  }
+  // A B-spline's span slot for (u, v): the one on its knot span, else the least recently used
+  // one, which moves there.
+  Span& SpanOf(double u, double v) {
     ++clock_;
+    Span* last = last_;  // consecutive points mostly share a span: try the last one first
+    if (last && last->u0 <= u && u < last->u1 && last->v0 <= v && v < last->v1) {
+      last->last_use = clock_;
+      return *last;
+    }
     Span* oldest = &spans_[0];
     for (Span& span : spans_) {
       if (span.u0 <= u && u < span.u1 && span.v0 <= v && v < span.v1) {
         span.last_use = clock_;
-        return span.adaptor;
+        last_ = &span;
+        return span;
       }
       if (span.last_use < oldest->last_use) oldest = &span;
     }
@@ -239,15 +403,20 @@ class OcctSurface final : public Surface {
     interval(uknots.at, u, &oldest->u0, &oldest->u1);
     interval(vknots.at, v, &oldest->v0, &oldest->v1);
     oldest->last_use = clock_;
-    return oldest->adaptor;
+    last_ = oldest;
+    return *oldest;
   }
 
   GeomAdaptor_Surface adaptor_;
-  bool is_sphere_ = false;
-  std::array<gp_XYZ, 4> sphere_;  // x, y and z directions and centre of a sphere
-  double radius_ = 0;
-  std::vector<CosSin> u_trig_, v_trig_;  // a sphere's cos and sin of recent parameters
+  enum class Kind { kOther, kPlane, kCylinder, kCone, kSphere };
+  Kind kind_ = Kind::kOther;             // which closed form Point() uses, if any
+  std::array<gp_XYZ, 4> frame_;          // x, y and z directions and origin of an elementary one
+  double radius_ = 0;                    // a cone's reference radius
+  double cone_sin_ = 0, cone_cos_ = 0;   // of a cone's semi-angle
+  std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
+  Handle(Geom_BSplineSurface) bspline_;  // null unless B-spline
   std::vector<Span> spans_;              // empty unless B-spline
+  Span* last_ = nullptr;                 // the span slot SpanOf() returned last
   uint64_t clock_ = 0;
 };
 

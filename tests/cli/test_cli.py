@@ -11,7 +11,8 @@ FAST_MODELS = ["cq_red_cube_blue_cylinder.step", "axom_sliced_cylinder.step",
 FORMATS = [".msh", ".stl", ".obj", ".ply", ".vtu", ".glb"]
 MESH_OPTIONS = ["--max-deviation", "--max-deviation-rel", "--rd-tolerance", "--max-triangles",
                 "--min-edge-length", "--max-edge-length", "--nurbs", "--threads", "--faces",
-                "--timeout", "--strict", "--json", "--quiet", "--output"]
+                "--timeout", "--strict", "--json", "--quiet", "--output", "--edges", "--no-edges",
+                "--msh-parametric"]
 JSON_FIELDS = ["triangles", "nodes", "seconds", "load_seconds", "requested_deviation",
                "estimated_deviation", "mesh_area", "exact_area", "faces_ok", "faces_failed",
                "output", "faces"]
@@ -36,12 +37,36 @@ def gmsh_triangles(path):
     return count, surfaces
 
 
+def gmsh_lines(path):
+    """{curve tag: [(a, b), ...]} of the 2-node line elements (type 1) an MSH file holds, as Gmsh
+    reads them (no other element lies on a curve), and the set of triangle sides {a, b}."""
+    import gmsh
+
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        lines, sides = {}, set()
+        for dim, tag in gmsh.model.getEntities(1):
+            types, _, nodes = gmsh.model.mesh.getElements(dim, tag)
+            assert all(t == 1 for t in types)
+            if len(types):
+                lines[tag] = [(int(a), int(b)) for a, b in zip(nodes[0][::2], nodes[0][1::2])]
+        for dim, tag in gmsh.model.getEntities(2):
+            _, _, nodes = gmsh.model.mesh.getElements(dim, tag)
+            for a, b, c in zip(nodes[0][::3], nodes[0][1::3], nodes[0][2::3]):
+                sides |= {frozenset((a, b)), frozenset((b, c)), frozenset((c, a))}
+    finally:
+        gmsh.finalize()
+    return lines, sides
+
+
 def meshio_triangles(path):
     import meshio
 
     mesh = meshio.read(str(path))
-    assert all(block.type == "triangle" for block in mesh.cells)
-    return sum(len(block.data) for block in mesh.cells), mesh
+    assert all(block.type in ("triangle", "line") for block in mesh.cells)
+    return sum(len(block.data) for block in mesh.cells if block.type == "triangle"), mesh
 
 
 def test_help_lists_every_option_with_defaults(run):
@@ -99,9 +124,12 @@ def test_every_format_reads_back(run, data_dir, tmp_path, gltf_validate, model, 
     assert output.is_file()
 
     if extension == ".msh":
-        # meshio 5 cannot read parametric MSH 4.1 nodes: gmsh is the reference reader.
+        # Both Gmsh and meshio read it, with the same triangles.
         count, surfaces = gmsh_triangles(output)
         assert surfaces == len(report["faces"])
+        meshio_count, mesh = meshio_triangles(output)
+        assert meshio_count == count
+        assert len(mesh.points) == report["nodes"]
     elif extension == ".glb":
         validation = gltf_validate(output)
         assert validation["errors"] == 0, validation["messages"]
@@ -260,3 +288,82 @@ def test_instanced_assembly(run, shared_dir, tmp_path, gltf_validate):
         else:
             count, surfaces = gmsh_triangles(output)
         assert count == result.json["triangles"]
+
+
+def obj_lines(path):
+    """Vertex positions (1-based list) and `l` records of an OBJ file."""
+    positions, lines = [None], []
+    for record in open(path):
+        fields = record.split()
+        if fields and fields[0] == "v":
+            positions.append(tuple(float(v) for v in fields[1:4]))
+        elif fields and fields[0] == "l":
+            lines.append([int(v) for v in fields[1:]])
+    return positions, lines
+
+
+@pytest.mark.parametrize("model", FAST_MODELS)
+def test_edges_as_lines(run, data_dir, tmp_path, model):
+    """--edges (the default): every edge of the model as line elements on its curve entity that
+    join nodes of the triangles, read the same by Gmsh and meshio; the OBJ has one `l` per edge
+    at the same points; --no-edges leaves them out."""
+    output = tmp_path / "out.msh"
+    result = run("mesh", data_dir / model, "-o", output, "--json")
+    assert result.code == 0, result.stderr
+    lines, triangle_sides = gmsh_lines(output)
+    assert lines
+    _, mesh = meshio_triangles(output)
+    segments = 0
+    for tag, polyline in lines.items():
+        for (a, b), (c, _) in zip(polyline, polyline[1:] + [(polyline[-1][1], None)]):
+            assert b == c, f"curve {tag}: line elements do not follow each other"
+            assert frozenset((a, b)) in triangle_sides, f"curve {tag}: {a}-{b} is no triangle side"
+        segments += len(polyline)
+    assert sum(len(b.data) for b in mesh.cells if b.type == "line") == segments
+
+    plain = tmp_path / "plain.msh"
+    assert run("mesh", data_dir / model, "-o", plain, "-q", "--no-edges").code == 0
+    assert gmsh_lines(plain)[0] == {}
+    assert gmsh_triangles(plain)[0] == result.json["triangles"]
+
+    obj = tmp_path / "out.obj"
+    assert run("mesh", data_dir / model, "-o", obj, "-q").code == 0
+    positions, records = obj_lines(obj)
+    assert len(records) == len(lines)
+    points = {tuple(p) for p in mesh.points}
+    for record in records:
+        for index in record:
+            assert positions[index] in points
+
+
+def test_msh_parametric_round_trips_the_parameters(run, data_dir, tmp_path):
+    """--msh-parametric writes t on curve nodes and (u, v) on surface nodes, which Gmsh reads
+    back; the nodes are the default file's. meshio 5 reads only the default file."""
+    import gmsh
+    import meshio
+
+    model = data_dir / "axom_sliced_cylinder.step"
+    plain, parametric = tmp_path / "plain.msh", tmp_path / "parametric.msh"
+    assert run("mesh", model, "-o", plain, "-q").code == 0
+    assert run("mesh", model, "-o", parametric, "-q", "--msh-parametric").code == 0
+    with pytest.raises((Exception, SystemExit)):  # meshio 5 exits on "parametric nodes"
+        meshio.read(str(parametric))
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(parametric))
+        with_params = 0
+        for dim, tag in gmsh.model.getEntities():
+            if dim == 0:
+                continue
+            tags, _, params = gmsh.model.mesh.getNodes(dim, tag, returnParametricCoord=True)
+            assert len(params) == dim * len(tags), (dim, tag)
+            with_params += len(tags)
+        all_tags, coords, _ = gmsh.model.mesh.getNodes()
+    finally:
+        gmsh.finalize()
+    mesh = meshio.read(str(plain))
+    assert with_params > 0
+    assert len(all_tags) == len(mesh.points)
+    assert sorted(map(tuple, coords.reshape(-1, 3).tolist())) == sorted(
+        map(tuple, mesh.points.tolist()))

@@ -110,7 +110,7 @@ inline void MeshRectangle(AnalyticFace* f, double u0, double u1, double v0, doub
       seeds.push_back({u0 + (u1 - u0) * (i + 0.5) / 8, v0 + (v1 - v0) * (j + 0.5) / 4});
   for (Vec2 p : seeds) scaled.push_back({p.x * f->scale_u, p.y * f->scale_v});
   CdtResult cdt;
-  Status st = ConstrainedTriangulation(scaled, segments, &cdt);
+  Status st = ConstrainedTriangulation(scaled, segments, nullptr, &cdt);
   if (!st.ok()) {
     std::fprintf(stderr, "CDT failed: %s\n", st.message().c_str());
     return;

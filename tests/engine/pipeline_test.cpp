@@ -19,6 +19,7 @@
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <gp_Circ.hxx>
@@ -257,6 +258,71 @@ TEST(PipelineTest, CancelStopsTheRun) {
   context.Cancel();
   EXPECT_EQ(MeshModel(*model, MeshOptions(), &context).status().code(), StatusCode::kCancelled);
 }
+
+// A caller's deadline that passes before options.timeout_seconds ends the run as
+// kDeadlineExceeded: the engine's own timeout must not replace it with a later one.
+TEST(PipelineTest, CallersEarlierDeadlineWinsOverTimeoutSeconds) {
+  auto model = LoadData("nist_mbe_pmi_11.stp");
+  ASSERT_TRUE(model);
+  Context context;
+  context.SetDeadline(std::chrono::steady_clock::now() - std::chrono::milliseconds(1));
+  MeshOptions options;
+  options.timeout_seconds = 3600;
+  EXPECT_EQ(MeshModel(*model, options, &context).status().code(), StatusCode::kDeadlineExceeded);
+}
+
+// Absurd options (a deviation, an RD tolerance or an edge length far below the model's size)
+// ask for more work than any deadline allows: the run stops within a second or so of it, in
+// whatever stage it is, as kDeadlineExceeded.
+struct AbsurdCase {
+  const char* name;
+  const char* file;
+  MeshOptions options;
+  double timeout;
+};
+
+// ctest lists parameterised tests with their parameter: print the case's name, not its bytes.
+void PrintTo(const AbsurdCase& c, std::ostream* os) { *os << c.name; }
+
+MeshOptions Absurd(double deviation, double rd, double max_length, int threads) {
+  MeshOptions options;
+  options.max_deviation = deviation;
+  options.rd_tolerance = rd;
+  options.max_edge_length = max_length;
+  options.threads = threads;
+  return options;
+}
+
+class AbsurdOptionsTest : public ::testing::TestWithParam<AbsurdCase> {};
+
+TEST_P(AbsurdOptionsTest, StopsSoonAfterTheDeadline) {
+  const AbsurdCase& c = GetParam();
+  auto model = LoadData(c.file);
+  ASSERT_TRUE(model);
+  MeshOptions options = c.options;
+  options.timeout_seconds = c.timeout;
+  auto start = std::chrono::steady_clock::now();
+  auto result = MeshModel(*model, options);
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(result.status().code(), StatusCode::kDeadlineExceeded) << result.status().ToString();
+  EXPECT_GE(seconds, c.timeout * 0.99);
+  EXPECT_LT(seconds, c.timeout + 2.0)
+      << "stopped " << seconds - c.timeout << " s after the deadline";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Deadline, AbsurdOptionsTest,
+    ::testing::Values(
+        AbsurdCase{"deviation_1e_12", "axom_sliced_cylinder.step", Absurd(1e-12, 0, 0, 0), 1.0},
+        AbsurdCase{"deviation_1e_12_one_thread", "axom_sliced_cylinder.step",
+                   Absurd(1e-12, 0, 0, 1), 1.0},
+        AbsurdCase{"rd_1e_12", "axom_sliced_cylinder.step", Absurd(0, 1e-12, 0, 0), 1.0},
+        AbsurdCase{"max_edge_1e_9", "axom_sliced_cylinder.step", Absurd(0, 0, 1e-9, 0), 1.0},
+        // Late enough to reach the faces: the triangulation of ~10^5 boundary nodes and the
+        // collapse pass ran 88 s past this deadline before they polled the context.
+        AbsurdCase{"deviation_1e_12_in_faces", "axom_sliced_cylinder.step", Absurd(1e-12, 0, 0, 0),
+                   10.0}),
+    [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
 }  // namespace rdmesh

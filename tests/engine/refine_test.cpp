@@ -135,7 +135,7 @@ TEST(RefineTest, StandingFinIsRefinedAway) {
   // The chord is a constraint of the triangulation only: refinement may flip or split it.
   segments.push_back({a, b});
   CdtResult cdt;
-  ASSERT_TRUE(ConstrainedTriangulation(uv, segments, &cdt).ok());
+  ASSERT_TRUE(ConstrainedTriangulation(uv, segments, nullptr, &cdt).ok());
   for (size_t t = 0; t < cdt.triangles.size(); ++t)
     for (int i = 0; i < 3; ++i) {
       int p = cdt.triangles[t][(i + 1) % 3], q = cdt.triangles[t][(i + 2) % 3];

@@ -4,11 +4,20 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCone.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
 #include <BRep_Tool.hxx>
+#include <GeomAPI_PointsToBSplineSurface.hxx>
 #include <GeomAdaptor_Surface.hxx>
+#include <GeomConvert.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <Geom_ToroidalSurface.hxx>
+#include <TColgp_Array2OfPnt.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <algorithm>
@@ -76,31 +85,77 @@ TEST(SurfaceTest, BSplineValuesDoNotDependOnTheEvaluationOrder) {
   }
 }
 
-TEST(SurfaceTest, SphereMatchesOcctBitForBit) {
+// Each face of `shape` of surface type `type`, moved off the origin and tilted, evaluates to
+// OCCT's values bit for bit.
+void ExpectFacesMatchOcct(const TopoDS_Shape& shape, GeomAbs_SurfaceType type) {
   gp_Trsf move;
   move.SetRotation(gp_Ax1(gp_Pnt(1, 2, 3), gp_Dir(1, 1, 0.3)), 0.7);
   move.SetTranslationPart(gp_Vec(-4.5, 0.25, 12));
-  TopoDS_Shape sphere =
-      BRepBuilderAPI_Transform(BRepPrimAPI_MakeSphere(gp_Pnt(0.3, -2, 1), 7.25).Shape(), move);
-  TopoDS_Face face = TopoDS::Face(TopExp_Explorer(sphere, TopAbs_FACE).Current());
-  std::unique_ptr<Surface> ours = MakeFaceSurface(face, false);
-  GeomAdaptor_Surface occt(BRep_Tool::Surface(face));
-  ASSERT_EQ(occt.GetType(), GeomAbs_Sphere);
-  for (const Vec2& q : Samples(*ours, 5000, 4)) {
-    gp_Pnt p = occt.Value(q.x, q.y);
-    ASSERT_TRUE(SameBits(ours->Point(q.x, q.y), {p.X(), p.Y(), p.Z()}));
-  }
-  // Points that share a u or a v with earlier ones (the evaluator remembers cos and sin of
-  // recent parameters), in an order that revisits each row and column many times.
-  std::vector<Vec2> grid = Samples(*ours, 40, 5);
-  for (int pass = 0; pass < 3; ++pass) {
-    for (const Vec2& a : grid) {
-      for (const Vec2& b : grid) {
-        gp_Pnt p = occt.Value(a.x, b.y);
-        ASSERT_TRUE(SameBits(ours->Point(a.x, b.y), {p.X(), p.Y(), p.Z()}));
+  TopoDS_Shape moved = BRepBuilderAPI_Transform(shape, move);
+  int faces = 0;
+  for (TopExp_Explorer it(moved, TopAbs_FACE); it.More(); it.Next()) {
+    TopoDS_Face face = TopoDS::Face(it.Current());
+    GeomAdaptor_Surface occt(BRep_Tool::Surface(face));
+    if (occt.GetType() != type) continue;
+    ++faces;
+    std::unique_ptr<Surface> ours = MakeFaceSurface(face, false);
+    for (const Vec2& q : Samples(*ours, 5000, 4)) {
+      gp_Pnt p = occt.Value(q.x, q.y);
+      ASSERT_TRUE(SameBits(ours->Point(q.x, q.y), {p.X(), p.Y(), p.Z()}));
+    }
+    // Points that share a u or a v with earlier ones (the evaluator remembers cos and sin of
+    // recent parameters), in an order that revisits each row and column many times.
+    std::vector<Vec2> grid = Samples(*ours, 40, 5);
+    for (int pass = 0; pass < 3; ++pass) {
+      for (const Vec2& a : grid) {
+        for (const Vec2& b : grid) {
+          gp_Pnt p = occt.Value(a.x, b.y);
+          ASSERT_TRUE(SameBits(ours->Point(a.x, b.y), {p.X(), p.Y(), p.Z()}));
+        }
       }
     }
   }
+  EXPECT_GT(faces, 0);
+}
+
+TEST(SurfaceTest, BSplinePointsMatchOcctBitForBit) {
+  // Non-rational, bicubic over many knot spans, and rational (a torus as NURBS, degree 2).
+  TColgp_Array2OfPnt grid(1, 9, 1, 7);
+  for (int i = 1; i <= 9; ++i)
+    for (int j = 1; j <= 7; ++j)
+      grid(i, j) = gp_Pnt(1.5 * i, 0.8 * j, std::sin(0.9 * i) * std::cos(1.3 * j));
+  Handle(Geom_BSplineSurface) wavy = GeomAPI_PointsToBSplineSurface(grid).Surface();
+  Handle(Geom_BSplineSurface) torus = GeomConvert::SurfaceToBSplineSurface(
+      new Geom_ToroidalSurface(gp_Ax3(gp_Pnt(0.3, -2, 1), gp_Dir(0.2, -0.4, 1)), 3.0, 1.25));
+  for (const Handle(Geom_BSplineSurface) & bspline : {wavy, torus}) {
+    TopoDS_Face face = BRepBuilderAPI_MakeFace(bspline, 1e-7);
+    std::unique_ptr<Surface> ours = MakeFaceSurface(face, false);
+    GeomAdaptor_Surface occt(BRep_Tool::Surface(face));
+    ASSERT_EQ(occt.GetType(), GeomAbs_BSplineSurface);
+    // Random points, then the same points again in another order (other spans cached), and the
+    // knots themselves, where the span a parameter falls in is decided.
+    std::vector<Vec2> points = Samples(*ours, 5000, 6);
+    std::shuffle(points.begin(), points.end(), std::mt19937(7));
+    std::vector<Vec2> more = Samples(*ours, 5000, 6);
+    points.insert(points.end(), more.begin(), more.end());
+    for (double u : ours->uknots.at)
+      for (double v : ours->vknots.at) points.push_back({u, v});
+    for (const Vec2& q : points) {
+      gp_Pnt p = occt.Value(q.x, q.y);
+      ASSERT_TRUE(SameBits(ours->Point(q.x, q.y), {p.X(), p.Y(), p.Z()}));
+    }
+  }
+}
+
+TEST(SurfaceTest, SphereMatchesOcctBitForBit) {
+  ExpectFacesMatchOcct(BRepPrimAPI_MakeSphere(gp_Pnt(0.3, -2, 1), 7.25).Shape(), GeomAbs_Sphere);
+}
+
+TEST(SurfaceTest, PlaneCylinderAndConeMatchOcctBitForBit) {
+  gp_Ax2 axis(gp_Pnt(0.3, -2, 1), gp_Dir(0.2, -0.4, 1));
+  ExpectFacesMatchOcct(BRepPrimAPI_MakeBox(axis, 3.5, 1.25, 7).Shape(), GeomAbs_Plane);
+  ExpectFacesMatchOcct(BRepPrimAPI_MakeCylinder(axis, 2.75, 9.5).Shape(), GeomAbs_Cylinder);
+  ExpectFacesMatchOcct(BRepPrimAPI_MakeCone(axis, 3.25, 1.5, 6).Shape(), GeomAbs_Cone);
 }
 
 }  // namespace

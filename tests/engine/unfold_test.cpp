@@ -42,7 +42,7 @@ void BuildStrip(Surface& s, bool seed, WorkMesh* m) {
   const int boundary = static_cast<int>(uv.size());
   if (seed) uv.push_back({0.2, 10});
   CdtResult cdt;
-  ASSERT_TRUE(ConstrainedTriangulation(uv, segments, &cdt).ok());
+  ASSERT_TRUE(ConstrainedTriangulation(uv, segments, nullptr, &cdt).ok());
   for (int i = 0; i < static_cast<int>(uv.size()); ++i)
     m->AddNode(uv[i], s.Point(uv[i].x, uv[i].y), s.Normal(uv[i].x, uv[i].y), i < boundary,
                i < boundary ? NodeRef{0, 0, 0} : NodeRef{});

@@ -188,6 +188,9 @@ class WritersTest : public ::testing::Test {
 // Counts from a MSH 4.1 ASCII file, with checks of its structure.
 struct MshCounts {
   int64_t nodes = 0, triangles = 0, parametric_blocks = 0, surface_blocks = 0;
+  std::map<int, std::vector<int64_t>> lines;      // curve tag -> node tags of its line elements
+  std::map<int64_t, std::vector<double>> params;  // node tag -> its parameters (parametric only)
+  int64_t max_element_tag = 0;
 };
 
 MshCounts ReadMsh(const std::string& path) {
@@ -208,38 +211,59 @@ MshCounts ReadMsh(const std::string& path) {
         int dim, tag, parametric;
         int64_t count;
         in >> dim >> tag >> parametric >> count;
-        EXPECT_EQ(parametric, dim > 0 ? 1 : 0);
+        EXPECT_TRUE(parametric == 0 || (parametric == 1 && dim > 0)) << dim << " " << parametric;
         counts.parametric_blocks += parametric;
-        for (int64_t i = 0; i < count; ++i) {
-          int64_t node;
+        std::vector<int64_t> tags(count);
+        for (int64_t& node : tags) {
           in >> node;
           EXPECT_TRUE(node >= 1 && node <= nodes && !seen[node]) << node;
           if (node >= 1 && node <= nodes) seen[node] = true;
         }
-        for (int64_t i = 0; i < count * (3 + (dim > 0 ? dim : 0)); ++i) {
+        for (int64_t node : tags) {
           double x;
-          in >> x;
+          for (int k = 0; k < 3; ++k) in >> x;
+          for (int k = 0; k < (parametric ? dim : 0); ++k) {
+            in >> x;
+            counts.params[node].push_back(x);
+          }
         }
       }
       EXPECT_TRUE(in.good());
     } else if (line == "$Elements") {
       int64_t blocks, elements, min_tag, max_tag;
       in >> blocks >> elements >> min_tag >> max_tag;
+      int64_t read = 0;
       for (int64_t b = 0; b < blocks; ++b) {
         int dim, tag, type;
         int64_t count;
         in >> dim >> tag >> type >> count;
-        EXPECT_EQ(dim, 2);
-        EXPECT_EQ(type, 2);
+        read += count;
+        EXPECT_TRUE((dim == 2 && type == 2) || (dim == 1 && type == 1)) << dim << " " << type;
+        if (dim == 1) {
+          EXPECT_EQ(counts.lines.count(tag), 0u) << "two line blocks on curve " << tag;
+          std::vector<int64_t>& polyline = counts.lines[tag];
+          for (int64_t i = 0; i < count; ++i) {
+            int64_t element, a, b2;
+            in >> element >> a >> b2;
+            EXPECT_EQ(element, ++counts.max_element_tag);
+            EXPECT_TRUE(a >= 1 && a <= counts.nodes && b2 >= 1 && b2 <= counts.nodes);
+            if (!polyline.empty()) EXPECT_EQ(polyline.back(), a);  // consecutive segments
+            if (polyline.empty()) polyline.push_back(a);
+            polyline.push_back(b2);
+          }
+          continue;
+        }
         ++counts.surface_blocks;
+        EXPECT_TRUE(counts.lines.empty()) << "triangles come first";
         for (int64_t i = 0; i < count; ++i) {
           int64_t element, a, b2, c;
           in >> element >> a >> b2 >> c;
+          EXPECT_EQ(element, ++counts.max_element_tag);
           EXPECT_TRUE(a >= 1 && a <= counts.nodes && c >= 1 && c <= counts.nodes);
         }
         counts.triangles += count;
       }
-      EXPECT_EQ(counts.triangles, elements);
+      EXPECT_EQ(read, elements);
     }
   }
   return counts;
@@ -289,6 +313,8 @@ GlbCounts ReadGlb(const std::string& path) {
 struct Obj {
   std::vector<gp_XYZ> positions;
   std::vector<std::array<int, 3>> triangles;
+  std::vector<std::vector<int>> lines;  // 1-based "l a b c" records
+  int64_t normals = 0;
 };
 
 Obj ReadObj(const std::string& path) {
@@ -312,6 +338,11 @@ Obj ReadObj(const std::string& path) {
       }
       EXPECT_FALSE(fields >> corner) << "not a triangle: " << line;
       obj.triangles.push_back(t);
+    } else if (tag == "l") {
+      obj.lines.emplace_back();
+      for (int index; fields >> index;) obj.lines.back().push_back(index);
+    } else if (tag == "vn") {
+      ++obj.normals;
     }
   }
   return obj;
@@ -364,7 +395,28 @@ TEST_F(WritersTest, EveryFormatReadsBack) {
   EXPECT_EQ(msh.nodes, nodes);
   EXPECT_EQ(msh.triangles, triangles);
   EXPECT_EQ(msh.surface_blocks, 6);
-  EXPECT_EQ(msh.parametric_blocks, 12 + 6);  // one block per edge and per face
+  EXPECT_EQ(msh.parametric_blocks, 0);  // plain nodes by default
+  EXPECT_EQ(msh.lines.size(), 12u);     // one line block per edge, two segments each
+  for (const auto& [edge, polyline] : msh.lines) EXPECT_EQ(polyline.size(), 3u) << edge;
+
+  WriteOptions parametric;
+  parametric.msh_parametric = true;
+  parametric.edges = false;
+  ASSERT_TRUE(WriteMesh(*model, result, Path("box_uv.msh"), parametric).ok());
+  MshCounts msh_uv = ReadMsh(Path("box_uv.msh"));
+  EXPECT_EQ(msh_uv.triangles, triangles);
+  EXPECT_EQ(msh_uv.parametric_blocks, 12 + 6);  // one block per edge and per face
+  EXPECT_TRUE(msh_uv.lines.empty());
+  // Every edge and face node reads back with its t or (u, v), bit for bit.
+  int64_t with_params = 0;
+  for (int64_t i = 0; i < nodes; ++i) {
+    int dim = result.mesh.node_dim[i];
+    const std::vector<double>& read = msh_uv.params[i + 1];
+    ASSERT_EQ(read.size(), static_cast<size_t>(dim)) << i;
+    for (int k = 0; k < dim; ++k) EXPECT_EQ(read[k], result.mesh.node_param[2 * i + k]) << i;
+    with_params += dim > 0;
+  }
+  EXPECT_EQ(with_params, 12 + 6);
 
   ASSERT_TRUE(WriteMesh(*model, result, Path("box.STL")).ok());
   std::string stl = ReadBytes(Path("box.STL"));
@@ -421,6 +473,30 @@ TEST_F(WritersTest, EveryFormatReadsBack) {
   std::vector<gp_XYZ> obj_xyz = {gp_XYZ()};  // 1-based
   obj_xyz.insert(obj_xyz.end(), obj.positions.begin(), obj.positions.end());
   ExpectOutward(obj_xyz, obj.triangles, {gp_XYZ(5, 10, 15)});
+  // The 12 edges as polylines on vertex records of their own (20 edge and vertex nodes), which
+  // lie where the mesh's nodes are; every vertex has its normal.
+  auto lines = BuildEdgeLines(*model, result.mesh);
+  ASSERT_TRUE(lines.ok());
+  ASSERT_EQ(obj.lines.size(), 12u);
+  EXPECT_EQ(static_cast<int64_t>(obj.positions.size()), 6 * 9 + 8 + 12);
+  EXPECT_EQ(obj.normals, static_cast<int64_t>(obj.positions.size()));
+  for (size_t i = 0; i < obj.lines.size(); ++i) {
+    ASSERT_EQ(obj.lines[i].size(), (*lines)[i].nodes.size());
+    for (size_t k = 0; k < obj.lines[i].size(); ++k) {
+      int index = obj.lines[i][k];
+      ASSERT_TRUE(index > 6 * 9 && index < static_cast<int>(obj_xyz.size())) << index;
+      const double* node = &result.mesh.xyz[3 * (*lines)[i].nodes[k]];
+      EXPECT_EQ(obj_xyz[index].X(), node[0]);
+      EXPECT_EQ(obj_xyz[index].Z(), node[2]);
+    }
+  }
+  WriteOptions no_edges;
+  no_edges.edges = false;
+  ASSERT_TRUE(WriteMesh(*model, result, Path("plain.obj"), no_edges).ok());
+  EXPECT_TRUE(ReadObj(Path("plain.obj")).lines.empty());
+  EXPECT_EQ(ReadObj(Path("plain.obj")).positions.size(), 6u * 9u);
+  ASSERT_TRUE(WriteMesh(*model, result, Path("plain.msh"), no_edges).ok());
+  EXPECT_TRUE(ReadMsh(Path("plain.msh")).lines.empty());
 
   ASSERT_TRUE(WriteMesh(*model, result, Path("box.glb")).ok());
   GlbCounts glb = ReadGlb(Path("box.glb"));

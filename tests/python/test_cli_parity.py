@@ -102,6 +102,29 @@ def test_remote_cli_writes_the_same_file(daemon, tmp_path, model, options, ext):
         assert (local.parent / name).read_bytes() == (remote.parent / name).read_bytes(), name
 
 
+@pytest.mark.parametrize("flags", [["--msh-parametric"], ["--no-edges"]])
+def test_remote_cli_honours_the_write_options(daemon, tmp_path, flags):
+    local, remote = tmp_path / "local.msh", tmp_path / "remote.msh"
+    run([CLI, "mesh", str(CYLINDER), "-o", str(local), "-q", *flags])
+    run([CLI, "mesh", str(CYLINDER), "-o", str(remote), "-q", "--remote", daemon.address, *flags])
+    assert remote.read_bytes() == local.read_bytes()
+    lines = local.read_text().split("\n")
+    i = lines.index("$Nodes") + 1
+    parametric = False
+    for _ in range(int(lines[i].split()[0])):
+        _, _, param, count = (int(v) for v in lines[i + 1].split())
+        parametric = parametric or param == 1
+        i += 1 + 2 * count
+    assert parametric == ("--msh-parametric" in flags)
+    i = lines.index("$Elements") + 1
+    types = set()
+    for _ in range(int(lines[i].split()[0])):
+        _, _, kind, count = (int(v) for v in lines[i + 1].split())
+        types.add(kind)
+        i += 1 + count
+    assert types == ({2} if "--no-edges" in flags else {1, 2})
+
+
 def test_remote_cli_errors(daemon, tmp_path):
     out = tmp_path / "out.msh"
     down = subprocess.run([CLI, "mesh", str(CUBE), "-o", str(out), "--remote", "127.0.0.1:1"],

@@ -37,9 +37,10 @@ class Context {
   void Cancel() { cancelled_.store(true); }
   bool cancelled() const { return cancelled_.load(); }
 
-  /// Stop the run when this point in time passes.
+  /// Stop the run when this point in time passes. The earliest deadline set wins: a later one
+  /// (say the engine's timeout_seconds after a caller's shorter deadline) leaves it unchanged.
   void SetDeadline(std::chrono::steady_clock::time_point deadline);
-  /// Convenience: deadline = now + seconds (ignored when seconds <= 0).
+  /// Convenience: SetDeadline(now + seconds) (ignored when seconds <= 0).
   void SetTimeout(double seconds);
 
   /// True when the run should stop (cancelled or past its deadline). Cheap; call often.

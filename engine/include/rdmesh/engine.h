@@ -38,6 +38,10 @@ struct ModelInfo {
 /// Model file formats.
 enum class ModelFormat { kAuto, kStep, kIges, kBrep };
 
+/// The format named by a path's extension (.step/.stp, .iges/.igs, .brep/.brp, any case), or
+/// kAuto when the extension is none of these.
+ModelFormat FormatFromExtension(const std::string& path);
+
 /// Loads a model from a file; the format follows the extension (.step/.stp, .iges/.igs, .brep).
 /// kNotFound, kParseError (with the file name and the reason) or kEmptyModel on failure.
 /// Thread-safe (OCCT's readers are serialised internally).
@@ -57,9 +61,33 @@ ModelInfo GetModelInfo(const Model& model);
 Result<MeshResult> MeshModel(const Model& model, const MeshOptions& options,
                              Context* context = nullptr);
 
+/// How WriteMesh writes; every field has a usable default.
+struct WriteOptions {
+  /// .msh: write each node's curve parameter t (edge nodes) or surface (u, v) (face-interior
+  /// nodes) in its $Nodes block (MSH "parametric" nodes). Off by default: Gmsh reads both, but
+  /// meshio 5 cannot read parametric nodes.
+  bool msh_parametric = false;
+  /// .msh and .obj: also write every B-rep edge (MeshResult::edges, degenerate ones left out) as
+  /// line elements along its shared edge grid. The other formats ignore it.
+  bool edges = true;
+};
+
 /// Writes the assembled mesh; the extension picks the format: .msh (MSH 4.1 ASCII), .stl
-/// (binary), .obj, .ply, .vtu, .glb.
-Status WriteMesh(const Model& model, const MeshResult& result, const std::string& path);
+/// (binary), .obj, .ply, .vtu, .glb. A result whose `edges` is empty while its mesh has triangles
+/// (one rebuilt from elsewhere, such as a remote run) gets them from BuildEdgeLines at the
+/// default sharp angle.
+Status WriteMesh(const Model& model, const MeshResult& result, const std::string& path,
+                 const WriteOptions& options = {});
+
+/// The edge polylines of an assembled mesh (MeshResult::edges): one EdgeLine per B-rep edge that
+/// bounds a face with triangles in `mesh` (but one whose B-rep OCCT fails to query, or whose
+/// vertices have no node at all), in edge id order, built from the mesh's node
+/// classification (node_dim, node_entity, node_param), so a mesh rebuilt from a remote run gets
+/// the same lines. An edge is sharp when the dihedral angle at its midpoint exceeds
+/// `sharp_angle` (degrees). kInternal when the mesh lacks its node classification or OCCT
+/// cannot map the shape's edges to their faces.
+Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mesh,
+                                             double sharp_angle = kDefaultSharpEdgeAngle);
 
 /// The file extensions WriteMesh understands, with the dot.
 std::vector<std::string> SupportedOutputFormats();

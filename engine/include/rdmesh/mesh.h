@@ -72,6 +72,28 @@ struct Mesh {
   int64_t node_count() const { return static_cast<int64_t>(xyz.size() / 3); }
 };
 
+/// One B-rep edge of the assembled mesh as a polyline: its edge grid, which every face beside
+/// the edge shares, so the polyline's nodes are boundary nodes of all those faces.
+struct EdgeLine {
+  int edge_id = 0;  ///< 1..E, TopExp::MapShapes order of the whole shape
+  /// 0-based Mesh node ids in curve order (increasing curve parameter of the FORWARD edge): the
+  /// start vertex's node, the edge nodes, the end vertex's node. A closed edge starts and ends
+  /// at the same node; a degenerate edge may be a single node. No id repeats consecutively.
+  std::vector<int32_t> nodes;
+  std::vector<int32_t> faces;  ///< ids of the B-rep faces the edge bounds, ascending, each once
+  bool seam = false;           ///< a face lies on both sides (the seam of a periodic surface)
+  bool degenerate = false;     ///< no extent in 3D: a pole, or an edge shorter than its tolerance
+  /// Sharp: the dihedral angle exceeds the sharp angle, or the edge is free (one face, no seam).
+  bool sharp = false;
+  /// Angle between the outward normals of the faces at the edge's parameter midpoint, degrees
+  /// (0 = tangent, 90 = a box's edge); the largest over pairs when more than two faces meet.
+  /// -1 when undefined: fewer than two faces, a seam, a degenerate edge or a singular normal.
+  double dihedral = -1.0;
+};
+
+/// Dihedral angle (degrees) above which an edge counts as sharp.
+inline constexpr double kDefaultSharpEdgeAngle = 30.0;
+
 /// Totals and timings of a run.
 struct MeshSummary {
   int64_t triangles = 0;
@@ -94,6 +116,8 @@ struct MeshSummary {
 struct MeshResult {
   std::vector<FaceMesh> faces;  ///< one per face id, in face id order (index = face_id - 1)
   Mesh mesh;                    ///< the assembled watertight mesh of the ok faces
+  /// The B-rep edges of `mesh` as polylines (BuildEdgeLines), in edge id order.
+  std::vector<EdgeLine> edges;
   MeshSummary summary;
 };
 

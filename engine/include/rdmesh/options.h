@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "rdmesh/mesh.h"
 #include "rdmesh/status.h"
 
 namespace rdmesh {
@@ -34,6 +35,10 @@ struct MeshOptions {
   std::vector<int> face_ids;
   /// Stop the run with kDeadlineExceeded after this many seconds. 0 = no limit.
   double timeout_seconds = 0.0;
+  /// MeshResult::edges: an edge whose faces meet at a dihedral angle above this (degrees, in
+  /// [0, 180]) is sharp. It changes no triangle or node. (Not carried by the service, which
+  /// sends no edges: a remote result gets its edges at the default.)
+  double sharp_edge_angle = kDefaultSharpEdgeAngle;
 };
 
 /// Checks ranges and combinations; kInvalidArgument with a readable message when out of range.

@@ -100,7 +100,7 @@ Status CheckClassification(const Model& model, const Mesh& mesh) {
   return Status::Ok();
 }
 
-void WriteNodes(const Mesh& mesh, OutputFile* out) {
+void WriteNodes(const Mesh& mesh, bool parametric, OutputFile* out) {
   // Node ids sorted by (dimension, entity), stable in id within an entity.
   std::vector<int64_t> order(mesh.node_count());
   std::iota(order.begin(), order.end(), 0);
@@ -128,7 +128,8 @@ void WriteNodes(const Mesh& mesh, OutputFile* out) {
     out->Int(dim);
     out->Char(' ');
     out->Int(mesh.node_entity[order[begin]]);
-    out->Text(dim > 0 ? " 1 " : " 0 ");
+    const int params = parametric ? dim : 0;
+    out->Text(params > 0 ? " 1 " : " 0 ");
     out->Int(static_cast<int64_t>(end - begin));
     out->Char('\n');
     for (size_t i = begin; i < end; ++i) {
@@ -141,7 +142,7 @@ void WriteNodes(const Mesh& mesh, OutputFile* out) {
         if (k > 0) out->Char(' ');
         out->Number(mesh.xyz[3 * node + k]);
       }
-      for (int k = 0; k < dim; ++k) {
+      for (int k = 0; k < params; ++k) {
         out->Char(' ');
         out->Number(mesh.node_param[2 * node + k]);
       }
@@ -151,17 +152,24 @@ void WriteNodes(const Mesh& mesh, OutputFile* out) {
   out->Text("$EndNodes\n");
 }
 
-void WriteElements(const Model& model, const Mesh& mesh, OutputFile* out) {
+void WriteElements(const Model& model, const Mesh& mesh, const std::vector<EdgeLine>& edges,
+                   OutputFile* out) {
   std::vector<std::vector<int64_t>> by_face(model.face_count() + 1);
   for (int64_t t = 0; t < mesh.triangle_count(); ++t) by_face[mesh.triangle_face[t]].push_back(t);
   int64_t blocks = std::count_if(by_face.begin(), by_face.end(),
                                  [](const std::vector<int64_t>& ts) { return !ts.empty(); });
+  int64_t elements = mesh.triangle_count();
+  for (const EdgeLine& line : edges) {
+    if (line.degenerate || line.nodes.size() < 2) continue;
+    ++blocks;
+    elements += static_cast<int64_t>(line.nodes.size()) - 1;
+  }
   out->Text("$Elements\n");
   out->Int(blocks);
   out->Char(' ');
-  out->Int(mesh.triangle_count());
-  out->Text(mesh.triangle_count() > 0 ? " 1 " : " 0 ");
-  out->Int(mesh.triangle_count());
+  out->Int(elements);
+  out->Text(elements > 0 ? " 1 " : " 0 ");
+  out->Int(elements);
   out->Char('\n');
   int64_t tag = 0;
   for (int f = 1; f <= model.face_count(); ++f) {
@@ -180,12 +188,29 @@ void WriteElements(const Model& model, const Mesh& mesh, OutputFile* out) {
       out->Char('\n');
     }
   }
+  for (const EdgeLine& line : edges) {
+    if (line.degenerate || line.nodes.size() < 2) continue;
+    out->Text("1 ");
+    out->Int(line.edge_id);
+    out->Text(" 1 ");
+    out->Int(static_cast<int64_t>(line.nodes.size()) - 1);
+    out->Char('\n');
+    for (size_t k = 0; k + 1 < line.nodes.size(); ++k) {
+      out->Int(++tag);
+      out->Char(' ');
+      out->Int(line.nodes[k] + 1);
+      out->Char(' ');
+      out->Int(line.nodes[k + 1] + 1);
+      out->Char('\n');
+    }
+  }
   out->Text("$EndElements\n");
 }
 
 }  // namespace
 
-Status WriteMsh(const Model& model, const MeshResult& result, const std::string& path) {
+Status WriteMsh(const Model& model, const MeshResult& result, const std::vector<EdgeLine>& edges,
+                bool parametric, const std::string& path) {
   const Mesh& mesh = result.mesh;
   Status classified = CheckClassification(model, mesh);
   if (!classified.ok()) return classified;
@@ -198,8 +223,8 @@ Status WriteMsh(const Model& model, const MeshResult& result, const std::string&
   if (!opened.ok()) return opened;
   out.Text("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
   WriteEntities(model, &out);
-  WriteNodes(mesh, &out);
-  WriteElements(model, mesh, &out);
+  WriteNodes(mesh, parametric, &out);
+  WriteElements(model, mesh, edges, &out);
   return out.Close();
 }
 

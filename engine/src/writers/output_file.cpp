@@ -19,9 +19,9 @@ OutputFile::~OutputFile() {
   if (file_ != nullptr) std::fclose(file_);
 }
 
-Status OutputFile::Open(const std::string& path) {
+Status OutputFile::Open(const std::string& path, bool append) {
   path_ = path;
-  file_ = std::fopen(path.c_str(), "wb");
+  file_ = std::fopen(path.c_str(), append ? "ab" : "wb");
   if (file_ == nullptr) return WriteError(path, std::strerror(errno));
   buffer_.reserve(kBufferSize + 64);
   return Status::Ok();

@@ -24,8 +24,9 @@ class OutputFile {
   OutputFile& operator=(const OutputFile&) = delete;
   ~OutputFile();
 
-  /// Creates or truncates `path`; kIoError when it cannot be opened.
-  Status Open(const std::string& path);
+  /// Creates or truncates `path` (or, with `append`, writes on at its end); kIoError when it
+  /// cannot be opened.
+  Status Open(const std::string& path, bool append = false);
   /// Flushes and closes; kIoError when any write failed (disk full, ...).
   Status Close();
 

@@ -35,6 +35,19 @@ Status CheckMesh(const Model& model, const Mesh& mesh) {
   return Status::Ok();
 }
 
+Status CheckEdges(const Model& model, const Mesh& mesh, const std::vector<EdgeLine>& edges) {
+  for (const EdgeLine& line : edges) {
+    if (line.edge_id < 1 || line.edge_id > model.edge_count())
+      return Status(StatusCode::kInternal,
+                    "an edge line has edge id " + std::to_string(line.edge_id));
+    for (int32_t node : line.nodes)
+      if (node < 0 || node >= mesh.node_count())
+        return Status(StatusCode::kInternal, "edge line " + std::to_string(line.edge_id) +
+                                                 " refers to node " + std::to_string(node));
+  }
+  return Status::Ok();
+}
+
 std::string Extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -42,11 +55,13 @@ std::string Extension(const std::string& path) {
   return ext;
 }
 
-Status Dispatch(const Model& model, const MeshResult& result, const std::string& path) {
+// `edges` are the lines to write (empty when not asked for).
+Status Dispatch(const Model& model, const MeshResult& result, const std::vector<EdgeLine>& edges,
+                const WriteOptions& options, const std::string& path) {
   std::string ext = Extension(path);
-  if (ext == ".msh") return WriteMsh(model, result, path);
+  if (ext == ".msh") return WriteMsh(model, result, edges, options.msh_parametric, path);
   if (ext == ".stl") return WriteStl(result, path);
-  if (ext == ".obj") return WriteObj(model, result, path);
+  if (ext == ".obj") return WriteObj(model, result, edges, path);
   if (ext == ".ply") return WritePly(result, path);
   if (ext == ".vtu") return WriteVtu(result, path);
   if (ext == ".glb") return WriteGlb(model, result, path);
@@ -63,11 +78,24 @@ std::vector<std::string> SupportedOutputFormats() {
   return {".msh", ".stl", ".obj", ".ply", ".vtu", ".glb"};
 }
 
-Status WriteMesh(const Model& model, const MeshResult& result, const std::string& path) {
+Status WriteMesh(const Model& model, const MeshResult& result, const std::string& path,
+                 const WriteOptions& options) {
   Status checked = CheckMesh(model, result.mesh);
   if (!checked.ok()) return checked;
+  const std::string ext = Extension(path);
+  const bool edges_wanted = options.edges && (ext == ".msh" || ext == ".obj");
   try {
-    return Dispatch(model, result, path);
+    std::vector<EdgeLine> derived;
+    if (edges_wanted && result.edges.empty() && result.mesh.triangle_count() > 0) {
+      Result<std::vector<EdgeLine>> built = BuildEdgeLines(model, result.mesh);
+      if (!built.ok()) return built.status();
+      derived = std::move(*built);
+    }
+    const std::vector<EdgeLine>& edges =
+        edges_wanted && !result.edges.empty() ? result.edges : derived;  // derived: maybe none
+    checked = CheckEdges(model, result.mesh, edges);
+    if (!checked.ok()) return checked;
+    return Dispatch(model, result, edges, options, path);
   } catch (const Standard_Failure& failure) {
     return WriteError(path, failure.GetMessageString());
   } catch (const std::bad_alloc&) {

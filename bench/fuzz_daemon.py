@@ -1,0 +1,115 @@
+#!/usr/bin/env python3
+"""Many fuzzed models through one rdmeshd, with well-formed jobs beside them. Measures; the bar of
+issue 12: the daemon never restarts or drops a connection, every request ends with OK or a
+documented status, and the well-formed jobs all complete byte-identical to the local CLI.
+
+    /usr/bin/python3 bench/fuzz_daemon.py [-n 10000] [--seed 1] [--clients 8]
+                                          [--rdmeshd build/bin/rdmeshd] [--cli build/bin/rdmesh]
+
+Starts rdmeshd on loopback, runs `bench/fuzz_mutants.py -n N --daemon ADDRESS --no-cli` (one
+mutant at a time: upload and mesh at 1e-3 of the diagonal), and meanwhile --clients threads that
+each loop `rdmesh mesh MODEL -o OUT.msh --remote ADDRESS` over the bundled models and compare the
+file with a local `rdmesh mesh MODEL -o REF.msh` byte for byte. At the end it reports the
+mutants' outcomes (fuzz_mutants.py's summary), the well-formed jobs (done, identical, differing,
+failed), whether the daemon is the same process as at the start, and its worker counts.
+"""
+
+import argparse
+import collections
+import filecmp
+import pathlib
+import re
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "clients" / "python"))
+from rdmesh import Client  # noqa: E402
+
+MODELS = sorted(ROOT.glob("tests/data/*.st*p"))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("-n", "--count", type=int, default=10000)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--clients", type=int, default=8)
+    parser.add_argument("--rdmeshd", default=str(ROOT / "build" / "bin" / "rdmeshd"))
+    parser.add_argument("--cli", default=str(ROOT / "build" / "bin" / "rdmesh"))
+    args = parser.parse_args()
+
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix="fuzz-daemon-"))
+    log_path = tmp / "rdmeshd.log"
+    log = open(log_path, "w")
+    daemon = subprocess.Popen([args.rdmeshd, "--listen", "127.0.0.1:0", "--max-queue", "64"],
+                              stdout=log, stderr=subprocess.STDOUT)
+    address = None
+    for _ in range(600):
+        match = re.search(r"listening on (\S+):(\d+)", log_path.read_text())
+        if match:
+            address = "%s:%s" % match.groups()
+            break
+        time.sleep(0.05)
+    if address is None:
+        raise SystemExit("rdmeshd did not start:\n" + log_path.read_text())
+    print("rdmeshd pid %d on %s, log %s" % (daemon.pid, address, log_path), flush=True)
+
+    references = {}
+    for model in MODELS:
+        ref = tmp / (model.stem + ".ref.msh")
+        subprocess.run([args.cli, "mesh", str(model), "-o", str(ref), "--quiet"], check=True)
+        references[model] = ref
+
+    stop = threading.Event()
+    tally = collections.Counter()
+    lock = threading.Lock()
+
+    def well_formed(index):
+        count = 0
+        while not stop.is_set():
+            model = MODELS[(index + count) % len(MODELS)]
+            count += 1
+            out = tmp / ("client%d.msh" % index)
+            run = subprocess.run([args.cli, "mesh", str(model), "-o", str(out), "--quiet",
+                                  "--remote", address], capture_output=True, text=True)
+            if run.returncode != 0:
+                outcome = "failed (exit %d: %s)" % (run.returncode, run.stderr.strip()[-200:])
+            elif filecmp.cmp(out, references[model], shallow=False):
+                outcome = "identical"
+            else:
+                outcome = "differs (%s)" % model.name
+            with lock:
+                tally[outcome] += 1
+
+    threads = [threading.Thread(target=well_formed, args=(i,)) for i in range(args.clients)]
+    for thread in threads:
+        thread.start()
+    start = time.monotonic()
+    fuzz = subprocess.run([sys.executable, str(ROOT / "bench" / "fuzz_mutants.py"), "-n",
+                           str(args.count), "--seed", str(args.seed), "--daemon", address,
+                           "--no-cli"], capture_output=True, text=True)
+    stop.set()
+    for thread in threads:
+        thread.join()
+    print(fuzz.stdout[-4000:])
+    if fuzz.stderr.strip():
+        print("fuzz_mutants.py stderr:", fuzz.stderr[-2000:])
+    alive = daemon.poll() is None
+    status = Client(address).server_status() if alive else None
+    print("%.0f s; well-formed jobs beside them (%d clients): %s" % (
+        time.monotonic() - start, args.clients, dict(tally)))
+    print("daemon: %s (pid %d), uptime %s s, jobs completed %s, workers lost %s, refused "
+          "models %s" % ("alive, never restarted" if alive else "DIED", daemon.pid,
+                         round(status.uptime_seconds) if status else "-",
+                         status.jobs_completed if status else "-",
+                         status.workers_lost if status else "-",
+                         status.refused_models if status else "-"))
+    daemon.terminate()
+    daemon.wait()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,182 @@
+// BuildEdgeLines: every B-rep edge of an assembled mesh as a polyline of its nodes, with the
+// faces beside it and whether it is a seam, degenerate or sharp.
+//
+// The polylines come from the node classification alone (edge nodes sorted by curve parameter
+// between the nodes of the edge's vertices), so a mesh rebuilt from a remote run, which carries
+// the classification but not the edge grids, gives the same lines as the run itself.
+
+#include <BRep_Tool.hxx>
+#include <Geom2d_Curve.hxx>
+#include <Geom_Surface.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_ListOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Vertex.hxx>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "model.h"
+#include "rdmesh/engine.h"
+
+namespace rdmesh {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The outward unit normal of `face` where the edge's pcurve passes at parameter t, or nothing
+// where the surface is singular or the face has no pcurve for the edge.
+std::optional<gp_Dir> FaceNormalOnEdge(const TopoDS_Face& face, const TopoDS_Edge& edge, double t) {
+  try {
+    double first, last;
+    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last);
+    if (pcurve.IsNull()) return std::nullopt;
+    gp_Pnt2d uv = pcurve->Value(t);
+    // The bare surface: an adaptor would first compute the face's (u,v) bounds.
+    TopLoc_Location location;
+    Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
+    if (surface.IsNull()) return std::nullopt;
+    gp_Pnt point;
+    gp_Vec du, dv;
+    surface->D1(uv.X(), uv.Y(), point, du, dv);
+    gp_Vec normal = du.Crossed(dv);
+    if (normal.Magnitude() <= 1e-12 * std::max(1.0, du.Magnitude() * dv.Magnitude()))
+      return std::nullopt;
+    normal.Transform(location.Transformation());
+    if (face.Orientation() == TopAbs_REVERSED) normal.Reverse();
+    return gp_Dir(normal);
+  } catch (const Standard_Failure&) {
+    return std::nullopt;
+  }
+}
+
+// Largest angle (degrees) between the faces' normals at the edge's parameter midpoint; -1 when
+// a normal is undefined.
+double Dihedral(const Model& model, const TopoDS_Edge& edge, const std::vector<int32_t>& faces) {
+  double first, last;
+  BRep_Tool::Range(edge, first, last);
+  const double mid = 0.5 * (first + last);
+  std::vector<gp_Dir> normals;
+  for (int32_t f : faces) {
+    std::optional<gp_Dir> normal = FaceNormalOnEdge(model.face(f), edge, mid);
+    if (!normal) return -1.0;
+    normals.push_back(*normal);
+  }
+  double largest = 0.0;
+  for (size_t i = 0; i < normals.size(); ++i)
+    for (size_t j = i + 1; j < normals.size(); ++j)
+      largest = std::max(largest, normals[i].Angle(normals[j]) * 180.0 / kPi);
+  return largest;
+}
+
+// The mesh node of vertex `v`; when the vertex has none (it was merged into a neighbour across
+// an edge shorter than its tolerance), the vertex node nearest to its point.
+std::optional<int32_t> VertexNode(const Model& model, const Mesh& mesh,
+                                  const std::vector<int32_t>& vertex_node,
+                                  const std::vector<int32_t>& vertex_nodes, int v) {
+  if (v >= 1 && v < static_cast<int>(vertex_node.size()) && vertex_node[v] >= 0)
+    return vertex_node[v];
+  if (v < 1 || v > model.vertices.Extent() || vertex_nodes.empty()) return std::nullopt;
+  gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(model.vertices(v)));
+  int32_t best = vertex_nodes.front();
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (int32_t node : vertex_nodes) {
+    const double* q = &mesh.xyz[3 * static_cast<int64_t>(node)];
+    double d = p.SquareDistance(gp_Pnt(q[0], q[1], q[2]));
+    if (d < best_distance) best_distance = d, best = node;
+  }
+  return best;
+}
+
+}  // namespace
+
+Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mesh,
+                                             double sharp_angle) {
+  const int64_t nodes = mesh.node_count();
+  if (mesh.node_dim.size() != static_cast<size_t>(nodes) ||
+      mesh.node_entity.size() != static_cast<size_t>(nodes) ||
+      mesh.node_param.size() != 2 * static_cast<size_t>(nodes))
+    return Status(StatusCode::kInternal, "the mesh lacks node classification (node_dim, ...)");
+  const int ne = model.edge_count();
+  const int nv = model.vertices.Extent();
+
+  // Nodes by entity: vertex -> node, edge -> (t, node).
+  std::vector<int32_t> vertex_node(nv + 1, -1), vertex_nodes;
+  std::vector<std::vector<std::pair<double, int32_t>>> edge_nodes(ne + 1);
+  for (int64_t i = 0; i < nodes; ++i) {
+    int entity = mesh.node_entity[i];
+    auto node = static_cast<int32_t>(i);
+    if (mesh.node_dim[i] == 0 && entity >= 1 && entity <= nv) {
+      if (vertex_node[entity] < 0) vertex_node[entity] = node;
+      vertex_nodes.push_back(node);
+    } else if (mesh.node_dim[i] == 1 && entity >= 1 && entity <= ne) {
+      edge_nodes[entity].push_back({mesh.node_param[2 * i], node});
+    }
+  }
+
+  // Faces with triangles, and the faces beside each edge.
+  std::vector<bool> meshed(model.face_count() + 1, false);
+  for (int32_t f : mesh.triangle_face)
+    if (f >= 1 && f <= model.face_count()) meshed[f] = true;
+  TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+  try {
+    TopExp::MapShapesAndAncestors(model.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  } catch (const Standard_Failure& failure) {
+    return Status(StatusCode::kInternal,
+                  std::string("edge lines: no edge-face map: ") + failure.GetMessageString());
+  }
+
+  std::vector<EdgeLine> lines;
+  for (int e = 1; e <= ne; ++e) {
+    try {  // an edge OCCT cannot answer for is left out, the others still get lines
+      const TopoDS_Edge& edge = model.edge(e);
+      EdgeLine line;
+      line.edge_id = e;
+      bool any_meshed = false;
+      if (const TopTools_ListOfShape* faces = edge_faces.Seek(edge)) {
+        for (const TopoDS_Shape& face : *faces) {
+          int f = model.faces.FindIndex(face);
+          if (f < 1) continue;
+          line.faces.push_back(f);
+          any_meshed = any_meshed || meshed[f];
+          line.seam = line.seam || BRep_Tool::IsClosed(edge, TopoDS::Face(face));
+        }
+      }
+      if (!any_meshed) continue;
+      std::sort(line.faces.begin(), line.faces.end());
+      line.faces.erase(std::unique(line.faces.begin(), line.faces.end()), line.faces.end());
+
+      TopoDS_Vertex first, last;
+      TopExp::Vertices(TopoDS::Edge(edge.Oriented(TopAbs_FORWARD)), first, last);
+      std::optional<int32_t> start =
+          VertexNode(model, mesh, vertex_node, vertex_nodes,
+                     first.IsNull() ? 0 : model.vertices.FindIndex(first));
+      std::optional<int32_t> end = VertexNode(model, mesh, vertex_node, vertex_nodes,
+                                              last.IsNull() ? 0 : model.vertices.FindIndex(last));
+      if (!start || !end) continue;  // a mesh without vertex nodes: nothing to anchor the line
+      std::vector<std::pair<double, int32_t>>& inner = edge_nodes[e];
+      std::sort(inner.begin(), inner.end());
+      line.nodes.push_back(*start);
+      for (const auto& [t, node] : inner) line.nodes.push_back(node);
+      line.nodes.push_back(*end);
+      line.nodes.erase(std::unique(line.nodes.begin(), line.nodes.end()), line.nodes.end());
+
+      line.degenerate = BRep_Tool::Degenerated(edge) || line.nodes.size() < 2;
+      if (!line.degenerate && !line.seam && line.faces.size() >= 2)
+        line.dihedral = Dihedral(model, edge, line.faces);
+      const bool free = line.faces.size() == 1 && !line.seam && !line.degenerate;
+      line.sharp = free || line.dihedral > sharp_angle;
+      lines.push_back(std::move(line));
+    } catch (const Standard_Failure&) {
+    }
+  }
+  return lines;
+}
+
+}  // namespace rdmesh

@@ -1,0 +1,116 @@
+"""The CLI runs each command in a child process (clients/cli/isolation.h): when the child dies by
+a signal, the parent exits with the documented code and message. A FIFO as the model keeps the
+child in the loading phase until the test has signalled it."""
+
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import time
+
+import pytest
+
+
+def children(pid):
+    """Pids of the live processes whose parent is `pid`."""
+    found = []
+    for stat in pathlib.Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            found.append(int(stat.parent.name))
+    return found
+
+
+@pytest.fixture
+def stuck_run(cli, tmp_path):
+    """Starts `rdmesh ARGS` on a FIFO model (the run waits in loading); yields a function
+    start(*args, env=None) -> (process, child pid)."""
+    fifo = tmp_path / "model.step"
+    os.mkfifo(fifo)
+    started = []
+
+    def start(*args, env=None):
+        process = subprocess.Popen([str(cli), *args[:1], str(fifo), *args[1:]],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                   env=dict(os.environ, **(env or {})))
+        started.append(process)
+        deadline = time.monotonic() + 10
+        while not children(process.pid):
+            assert time.monotonic() < deadline, "rdmesh started no child process"
+            time.sleep(0.02)
+        [child] = children(process.pid)
+        return process, child
+
+    yield start
+    for process in started:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+
+
+def finish(process):
+    stdout, stderr = process.communicate(timeout=30)
+    lines = [line for line in stdout.splitlines() if line.strip()]
+    return process.returncode, json.loads(lines[-1]) if lines else None, stderr
+
+
+@pytest.mark.parametrize("command", [["info"], ["mesh", "-o", "out.msh"]])
+def test_reader_crash_exits_3(stuck_run, command):
+    process, child = stuck_run(*command, "--json")
+    os.kill(child, signal.SIGSEGV)
+    code, error, stderr = finish(process)
+    message = "cannot read '%s': the STEP reader crashed (SIGSEGV) on this model"
+    assert code == 3, stderr
+    assert "rdmesh: error: " + message % process.args[2] in stderr
+    assert error["exit_code"] == 3
+    assert error["error"]["code"] == "parse_error"
+    assert error["error"]["message"] == message % process.args[2]
+
+
+def test_killed_reader_is_named(stuck_run):
+    process, child = stuck_run("info")
+    os.kill(child, signal.SIGKILL)
+    code, _, stderr = finish(process)
+    assert code == 3
+    assert "the STEP reader was killed (SIGKILL) on this model" in stderr
+
+
+def test_sigterm_is_passed_on_and_exits_4(stuck_run):
+    process, child = stuck_run("mesh", "-o", "out.msh", "--json")
+    process.send_signal(signal.SIGTERM)
+    code, error, stderr = finish(process)
+    assert code == 4, stderr
+    assert "interrupted while loading" in stderr and "(SIGTERM)" in stderr
+    assert error["exit_code"] == 4 and error["error"]["code"] == "cancelled"
+    assert not pathlib.Path("/proc/%d" % child).exists()  # ended and reaped
+
+
+def test_second_interrupt_kills_a_stuck_run(stuck_run):
+    # The child waits in open(2), which a cancelled Context cannot end: the second SIGINT does.
+    process, _ = stuck_run("info")
+    process.send_signal(signal.SIGINT)
+    time.sleep(0.3)
+    assert process.poll() is None
+    process.send_signal(signal.SIGINT)
+    code, _, stderr = finish(process)
+    assert code == 4
+    assert "interrupted while loading" in stderr and "(SIGKILL)" in stderr
+
+
+def test_no_fork_runs_in_one_process(cli, tmp_path):
+    fifo = tmp_path / "model.step"
+    os.mkfifo(fifo)
+    process = subprocess.Popen([str(cli), "info", str(fifo)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True,
+                               env=dict(os.environ, RDMESH_NO_FORK="1"))
+    try:
+        time.sleep(0.5)
+        assert process.poll() is None and children(process.pid) == []
+    finally:
+        process.kill()
+        process.wait()
+    assert process.returncode == -signal.SIGKILL
