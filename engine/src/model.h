@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "model_payload.h"
 #include "rdmesh/engine.h"
 
 namespace rdmesh {
@@ -54,7 +55,30 @@ class Model {
   const TopoDS_Edge& edge(int id) const;  ///< id 1..E
 };
 
-struct ReadShape;
+/// A model parsed from its file, and its canonical payload: the model is what the payload reads
+/// back as (see ParseCanonical).
+struct CanonicalModel {
+  std::shared_ptr<const Model> model;
+  std::string payload;  ///< OCCT binary bytes (model_payload.h), of `kind`
+  PayloadKind kind = PayloadKind::kBinXcaf;
+};
+
+/// "step", "iges", "brep" ("unknown" for kAuto): ModelInfo::format.
+const char* FormatName(ModelFormat format);
+
+/// The whole file at `path`, with LoadModel's errors (kNotFound, kIoError).
+Result<std::string> ReadModelFile(const std::string& path);
+
+/// Reads the bytes of a model file (`format` kAuto: from the content), writes what the reader
+/// produced as a payload (BinXCAF, or BinTools for BREP), reads that back and builds the Model
+/// of THAT: OCCT's binary formats do not restore every bit the readers produced (BinTools
+/// rebuilds a plane's axes, re-orthogonalising its X direction), so a model parsed here and one
+/// read later from its stored payload (model_store.h) are the same bits and mesh identically.
+/// `path` is the file on disk ("" when none), `name` appears in messages, `display_name` in
+/// ModelInfo. The reader's errors, or the context's stop status.
+Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat format,
+                                      const std::string& path, const std::string& name,
+                                      const std::string& display_name, Context* context);
 
 /// The Model of what a reader produced: ids, instancing, face areas, model info. `name` appears
 /// in messages, `display_name` in ModelInfo. kEmptyModel, or kParseError for invalid topology.

@@ -4,36 +4,30 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <BinTools.hxx>
-#include <BinXCAFDrivers.hxx>
-#include <PCDM_ReadWriter.hxx>
-#include <PCDM_Reader.hxx>
-#include <PCDM_StorageDriver.hxx>
-#include <Standard_ErrorHandler.hxx>
-#include <Standard_Failure.hxx>
-#include <Storage_Data.hxx>
-#include <TCollection_AsciiString.hxx>
-#include <TDocStd_Document.hxx>
-#include <XCAFApp_Application.hxx>
+#include <Standard_Version.hxx>
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <mutex>
 #include <sstream>
 #include <vector>
 
 #include "model.h"
+#include "model_payload.h"
 #include "model_readers.h"
+#include "rdmesh/sha256.h"
 
 namespace rdmesh {
 namespace {
 
-constexpr const char* kMagic = "RDMESH-PARSED-MODEL 1";
-constexpr const char* kXcafFormat = "BinXCAF";
+/// The entry format: the header's first line. Bump it when the payload or the header changes.
+constexpr const char* kMagic = "RDMESH-PARSED-MODEL 2";
+/// Temporary files of writers that died are removed after this long.
+constexpr auto kStaleTemporary = std::chrono::hours(1);
 
 /// 64-bit FNV-1a: detects a truncated or damaged entry (the directory is the service's own, so
 /// nothing adversarial is expected of it).
@@ -44,104 +38,6 @@ uint64_t Checksum(const std::string& bytes) {
     hash *= 1099511628211ull;
   }
   return hash;
-}
-
-const char* FormatKey(ModelFormat format) {
-  switch (format) {
-    case ModelFormat::kStep:
-      return "step";
-    case ModelFormat::kIges:
-      return "iges";
-    case ModelFormat::kBrep:
-      return "brep";
-    case ModelFormat::kAuto:
-      break;
-  }
-  return "unknown";
-}
-
-ModelFormat FormatOfKey(const std::string& key) {
-  if (key == "step") return ModelFormat::kStep;
-  if (key == "iges") return ModelFormat::kIges;
-  if (key == "brep") return ModelFormat::kBrep;
-  return ModelFormat::kAuto;
-}
-
-/// The XCAF application with the binary formats defined (once per process). OCCT's application
-/// is a process-wide singleton; its drivers are shared, so their use is serialised.
-Handle(TDocStd_Application) BinaryApplication() {
-  static std::once_flag once;
-  Handle(TDocStd_Application) app = XCAFApp_Application::GetApplication();
-  std::call_once(once, [&] { BinXCAFDrivers::DefineFormat(app); });
-  return app;
-}
-
-std::mutex& DriverMutex() {
-  static std::mutex mutex;
-  return mutex;
-}
-
-Result<std::string> WritePayload(const Model& model, std::string* kind) {
-  std::ostringstream out(std::ios::binary);
-  if (model.doc.IsNull()) {
-    *kind = "bintools";
-    BinTools::Write(model.shape, out);
-  } else {
-    *kind = "binxcaf";
-    Handle(TDocStd_Application) app = BinaryApplication();
-    std::lock_guard<std::mutex> lock(DriverMutex());
-    Handle(PCDM_StorageDriver) writer = app->WriterFromFormat(kXcafFormat);
-    if (writer.IsNull()) return Status(StatusCode::kInternal, "OCCT has no BinXCAF writer");
-    // The writer wants a document opened by an application; ours are not registered in OCCT's
-    // session (see NewXcafDocument), so open this one, which registers nothing.
-    if (!model.doc->IsOpened()) model.doc->Open(app);
-    // The file names the document's storage format, which picks the reader; readers made by our
-    // STEP and IGES loads say "MDTV-XCAF". Name BinXCAF for the write only.
-    const TCollection_ExtendedString previous = model.doc->StorageFormat();
-    model.doc->ChangeStorageFormat(kXcafFormat);
-    writer->Write(model.doc, out);
-    model.doc->ChangeStorageFormat(previous);
-    if (writer->GetStoreStatus() != PCDM_SS_OK) {
-      return Status(StatusCode::kIoError, "OCCT could not write the XCAF document (status " +
-                                              std::to_string(writer->GetStoreStatus()) + ")");
-    }
-  }
-  if (!out) return Status(StatusCode::kIoError, "could not serialise the model");
-  return out.str();
-}
-
-Result<ReadShape> ReadPayload(const std::string& payload, const std::string& kind) {
-  ReadShape read;
-  std::istringstream in(payload, std::ios::binary);
-  if (kind == "bintools") {
-    BinTools::Read(read.shape, in);
-    if (read.shape.IsNull()) return Status(StatusCode::kParseError, "no shape in the entry");
-    return read;
-  }
-  if (kind != "binxcaf") return Status(StatusCode::kParseError, "unknown payload " + kind);
-  Handle(TDocStd_Application) app = BinaryApplication();
-  std::lock_guard<std::mutex> lock(DriverMutex());
-  Handle(Storage_Data) data;
-  const TCollection_ExtendedString format = PCDM_ReadWriter::FileFormat(in, data);
-  if (!(format == TCollection_ExtendedString(kXcafFormat))) {
-    return Status(StatusCode::kParseError,
-                  "the entry holds a '" + std::string(TCollection_AsciiString(format).ToCString()) +
-                      "' document, not " + kXcafFormat);
-  }
-  Handle(PCDM_Reader) reader = app->ReaderFromFormat(format);
-  if (reader.IsNull()) return Status(StatusCode::kParseError, "no OCCT reader for the entry");
-  // Read into a document of our own, not through the application's Open(): that would register
-  // the document in OCCT's session for good.
-  Handle(TDocStd_Document) doc = new TDocStd_Document(kXcafFormat);
-  reader->Read(in, data, doc, app);
-  if (reader->GetStatus() != PCDM_RS_OK) {
-    return Status(StatusCode::kParseError,
-                  "OCCT could not read the XCAF document (status " +
-                      std::to_string(static_cast<int>(reader->GetStatus())) + ")");
-  }
-  read.doc = doc;
-  read.shape = FreeShapesCompound(doc);
-  return read;
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same directory, fsync, rename.
@@ -171,6 +67,14 @@ Status WriteAtomically(const std::string& path, const std::string& bytes) {
   return Status::Ok();
 }
 
+/// The format LoadModelFromBytes reads `bytes` as: `format`, else `name`'s extension, else the
+/// content; kAuto when none fits.
+ModelFormat ResolveFormat(ModelFormat format, const std::string& name, const std::string& bytes) {
+  if (format == ModelFormat::kAuto) format = FormatFromExtension(name);
+  if (format == ModelFormat::kAuto) format = FormatFromContent(bytes);
+  return format;
+}
+
 }  // namespace
 
 ModelStore::ModelStore(std::string dir, uint64_t limit_bytes)
@@ -179,9 +83,57 @@ ModelStore::ModelStore(std::string dir, uint64_t limit_bytes)
   std::filesystem::create_directories(dir_, ignored);
 }
 
+std::string ModelStore::KeyOf(const std::string& bytes, ModelFormat format) {
+  return Sha256Hex(bytes) + "-" + FormatName(format);
+}
+
 std::string ModelStore::PathOf(const std::string& key) const { return dir_ + "/" + key + ".rdm"; }
 
-std::shared_ptr<const Model> ModelStore::Load(const std::string& key, std::string* problem,
+Result<std::shared_ptr<const Model>> ModelStore::LoadOrParse(const std::string& bytes,
+                                                             ModelFormat format,
+                                                             const std::string& name,
+                                                             Context* context,
+                                                             StoreOutcome* outcome) const {
+  return LoadOrParseAs(bytes, ResolveFormat(format, name, bytes), "", name, name, context, outcome);
+}
+
+Result<std::shared_ptr<const Model>> ModelStore::LoadFile(const std::string& path, Context* context,
+                                                          StoreOutcome* outcome) const {
+  Result<std::string> bytes = ReadModelFile(path);
+  if (!bytes.ok()) return bytes.status();
+  const std::string name = std::filesystem::path(path).filename().string();
+  return LoadOrParseAs(*bytes, ResolveFormat(ModelFormat::kAuto, path, *bytes), path, path, name,
+                       context, outcome);
+}
+
+Result<std::shared_ptr<const Model>> ModelStore::LoadOrParseAs(
+    const std::string& bytes, ModelFormat format, const std::string& path, const std::string& name,
+    const std::string& display_name, Context* context, StoreOutcome* outcome) const {
+  StoreOutcome ignored;
+  if (outcome == nullptr) outcome = &ignored;
+  *outcome = StoreOutcome();
+  if (format != ModelFormat::kAuto) {
+    outcome->key = KeyOf(bytes, format);
+    std::shared_ptr<const Model> stored =
+        Load(outcome->key, format, display_name, &outcome->problem, context);
+    if (stored != nullptr) {
+      outcome->from_store = true;
+      return stored;
+    }
+  }
+  Result<CanonicalModel> parsed = ParseCanonical(bytes, format, path, name, display_name, context);
+  if (!parsed.ok()) return parsed.status();
+  if (!outcome->key.empty()) {
+    Status saved = Save(outcome->key, *parsed);
+    if (!saved.ok()) {
+      outcome->problem += (outcome->problem.empty() ? "" : "; ") + saved.message();
+    }
+  }
+  return parsed->model;
+}
+
+std::shared_ptr<const Model> ModelStore::Load(const std::string& key, ModelFormat format,
+                                              const std::string& name, std::string* problem,
                                               Context* context) const {
   problem->clear();
   const std::string path = PathOf(key);
@@ -197,7 +149,7 @@ std::shared_ptr<const Model> ModelStore::Load(const std::string& key, std::strin
   std::istringstream header(bytes);
   std::string line;
   if (!std::getline(header, line) || line != kMagic) return discard("not an rdmesh entry");
-  std::string name, format, unit, kind;
+  std::string format_name, unit, kind_name, occt;
   double scale = 1.0;
   uint64_t size = 0, checksum = 0;
   while (std::getline(header, line) && !line.empty()) {
@@ -205,11 +157,11 @@ std::shared_ptr<const Model> ModelStore::Load(const std::string& key, std::strin
     if (eq == std::string::npos) return discard("a damaged header");
     const std::string field = line.substr(0, eq);
     const std::string value = line.substr(eq + 1);
-    if (field == "name") name = value;
-    if (field == "format") format = value;
+    if (field == "format") format_name = value;
+    if (field == "occt") occt = value;
     if (field == "length_unit") unit = value;
     if (field == "unit_scale_mm") scale = std::strtod(value.c_str(), nullptr);
-    if (field == "payload") kind = value;
+    if (field == "payload") kind_name = value;
     if (field == "payload_bytes") size = std::strtoull(value.c_str(), nullptr, 10);
     if (field == "payload_fnv1a64") checksum = std::strtoull(value.c_str(), nullptr, 16);
   }
@@ -218,57 +170,42 @@ std::shared_ptr<const Model> ModelStore::Load(const std::string& key, std::strin
   if (bytes.size() - start != size) return discard("truncated (payload size differs)");
   const std::string payload = bytes.substr(start);
   if (Checksum(payload) != checksum) return discard("corrupt (checksum differs)");
+  // Another OCCT may read the payload into other bits than the parse here would give.
+  if (occt != OCC_VERSION_COMPLETE) return discard("written by OCCT " + occt);
+  if (format_name != FormatName(format)) return discard("a " + format_name + " model");
+  PayloadKind kind;
+  if (!PayloadKindFromName(kind_name, &kind)) return discard("an unknown payload " + kind_name);
 
-  Result<ReadShape> read = Status(StatusCode::kInternal, "");
-  try {
-    OCC_CATCH_SIGNALS
-    read = ReadPayload(payload, kind);
-  } catch (const Standard_Failure& failure) {
-    return discard(std::string("OCCT failed reading it (") + failure.DynamicType()->Name() + ")");
-  }
+  Result<ReadShape> read = ReadPayload(payload, kind);
   if (!read.ok()) return discard(read.status().message());
   read->length_unit = unit;
   read->unit_scale_mm = scale;
-  Result<std::shared_ptr<const Model>> model =
-      BuildModel(std::move(*read), FormatOfKey(format), name, name);
+  Result<std::shared_ptr<const Model>> model = BuildModel(std::move(*read), format, name, name);
   if (!model.ok()) return discard(model.status().message());
   if (context != nullptr && context->ShouldStop()) return nullptr;
   utimensat(AT_FDCWD, path.c_str(), nullptr, 0);  // most recently used now
   return *model;
 }
 
-Status ModelStore::Save(const std::string& key, const Model& model) const {
-  std::string kind;
-  Result<std::string> payload = Status(StatusCode::kInternal, "");
-  try {
-    OCC_CATCH_SIGNALS
-    payload = WritePayload(model, &kind);
-  } catch (const Standard_Failure& failure) {
-    return Status(StatusCode::kInternal, std::string("OCCT failed writing the model (") +
-                                             failure.DynamicType()->Name() + ": " +
-                                             failure.GetMessageString() + ")");
-  }
-  if (!payload.ok()) return payload.status();
+Status ModelStore::Save(const std::string& key, const CanonicalModel& model) const {
+  const ModelInfo& info = model.model->info;
   std::ostringstream entry;
   char scale[64];
-  std::snprintf(scale, sizeof(scale), "%.17g", model.info.unit_scale_mm);
+  std::snprintf(scale, sizeof(scale), "%.17g", info.unit_scale_mm);
   char checksum[32];
   std::snprintf(checksum, sizeof(checksum), "%016llx",
-                static_cast<unsigned long long>(Checksum(*payload)));
-  std::string name = model.info.name;
-  std::replace(name.begin(), name.end(), '\n', ' ');
-  entry << kMagic << "\nname=" << name << "\nformat=" << model.info.format
-        << "\nlength_unit=" << model.info.length_unit << "\nunit_scale_mm=" << scale
-        << "\npayload=" << kind << "\npayload_bytes=" << payload->size()
+                static_cast<unsigned long long>(Checksum(model.payload)));
+  entry << kMagic << "\nformat=" << info.format << "\nocct=" << OCC_VERSION_COMPLETE
+        << "\nlength_unit=" << info.length_unit << "\nunit_scale_mm=" << scale
+        << "\npayload=" << PayloadKindName(model.kind) << "\npayload_bytes=" << model.payload.size()
         << "\npayload_fnv1a64=" << checksum << "\n\n";
-  Status written = WriteAtomically(PathOf(key), entry.str() + *payload);
+  Status written = WriteAtomically(PathOf(key), entry.str() + model.payload);
   if (!written.ok()) return written;
   Evict(key);
   return Status::Ok();
 }
 
 void ModelStore::Evict(const std::string& keep) const {
-  if (limit_bytes_ == 0) return;
   struct Entry {
     std::filesystem::path path;
     uint64_t bytes;
@@ -276,16 +213,25 @@ void ModelStore::Evict(const std::string& keep) const {
   };
   std::vector<Entry> entries;
   uint64_t total = 0;
+  const auto now = std::filesystem::file_time_type::clock::now();
   std::error_code error;
   for (const auto& item : std::filesystem::directory_iterator(dir_, error)) {
-    if (item.path().extension() != ".rdm") continue;
     std::error_code stat_error;
     const uint64_t bytes = item.file_size(stat_error);
     const auto used = item.last_write_time(stat_error);
     if (stat_error) continue;
+    const std::string file = item.path().filename().string();
+    if (file.find(".rdm.tmp.") != std::string::npos) {
+      // A writer that died mid-write (a live one renames its file within seconds).
+      std::error_code ignored;
+      if (now - used > kStaleTemporary) std::filesystem::remove(item.path(), ignored);
+      continue;
+    }
+    if (item.path().extension() != ".rdm") continue;
     entries.push_back({item.path(), bytes, used});
     total += bytes;
   }
+  if (limit_bytes_ == 0) return;
   std::sort(entries.begin(), entries.end(),
             [](const Entry& a, const Entry& b) { return a.used < b.used; });
   for (const Entry& entry : entries) {
