@@ -5,6 +5,7 @@
 // the daemon one call and one process, never the service.
 
 #include <cstdint>
+#include <string>
 
 namespace rdmesh::server {
 

@@ -83,9 +83,18 @@ void ComputeFaceAreas(Model* model) {
 
 }  // namespace
 
+DerivedValues DerivedValuesOf(const Model& model) {
+  DerivedValues derived;
+  derived.face_area = model.face_area;
+  derived.bbox = model.info.bbox;
+  derived.diagonal = model.info.diagonal;
+  return derived;
+}
+
 Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
                                                 const std::string& name,
-                                                const std::string& display_name) {
+                                                const std::string& display_name,
+                                                const DerivedValues* derived) {
   auto model = std::make_shared<Model>();
   model->shape = read.shape;
   model->doc = read.doc;
@@ -96,11 +105,25 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
     if (model->faces.IsEmpty())
       return Status(StatusCode::kEmptyModel, "'" + name + "' holds no faces");
     FindInstances(model.get());
-    ComputeFaceAreas(model.get());
+    if (derived != nullptr &&
+        derived->face_area.size() != static_cast<std::size_t>(model->face_count())) {
+      return Status(StatusCode::kParseError,
+                    "cannot read '" + name + "': " + std::to_string(derived->face_area.size()) +
+                        " face areas for " + std::to_string(model->face_count()) + " faces");
+    }
+    if (derived != nullptr) {
+      model->face_area = derived->face_area;
+    } else {
+      ComputeFaceAreas(model.get());
+    }
     for (int id = 1; id <= model->edge_count(); ++id)
       model->max_edge_tolerance =
           std::max(model->max_edge_tolerance, BRep_Tool::Tolerance(model->edge(id)));
-    model->info = ComputeModelInfo(*model);
+    model->info = ComputeModelInfo(*model, /*bounding_box=*/derived == nullptr);
+    if (derived != nullptr) {
+      model->info.bbox = derived->bbox;
+      model->info.diagonal = derived->diagonal;
+    }
   } catch (const Standard_Failure& failure) {
     return Status(StatusCode::kParseError, "cannot read '" + name + "': invalid topology (" +
                                                failure.DynamicType()->Name() + ")");

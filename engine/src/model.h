@@ -7,6 +7,7 @@
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
+#include <array>
 #include <gp_Trsf.hxx>
 #include <string>
 #include <vector>
@@ -80,10 +81,25 @@ Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat form
                                       const std::string& path, const std::string& name,
                                       const std::string& display_name, Context* context);
 
+/// What BuildModel computes slowly (exact face areas, the tight bounding box): a stored model
+/// brings them along, so that reading it is not dominated by recomputing them. Exactly the values
+/// BuildModel computed for the same payload, so a model built with them is the same.
+struct DerivedValues {
+  std::vector<double> face_area;  ///< Model::face_area
+  std::array<double, 6> bbox{};   ///< ModelInfo::bbox
+  double diagonal = 0.0;          ///< ModelInfo::diagonal
+};
+
+/// The DerivedValues of a built model.
+DerivedValues DerivedValuesOf(const Model& model);
+
 /// The Model of what a reader produced: ids, instancing, face areas, model info. `name` appears
-/// in messages, `display_name` in ModelInfo. kEmptyModel, or kParseError for invalid topology.
+/// in messages, `display_name` in ModelInfo. With `derived`, face areas and the bounding box are
+/// taken from it (kParseError when it does not fit the shape) instead of computed. kEmptyModel,
+/// or kParseError for invalid topology.
 Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
                                                 const std::string& name,
-                                                const std::string& display_name);
+                                                const std::string& display_name,
+                                                const DerivedValues* derived = nullptr);
 
 }  // namespace rdmesh

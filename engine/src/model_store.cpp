@@ -25,7 +25,7 @@ namespace rdmesh {
 namespace {
 
 /// The entry format: the header's first line. Bump it when the payload or the header changes.
-constexpr const char* kMagic = "RDMESH-PARSED-MODEL 2";
+constexpr const char* kMagic = "RDMESH-PARSED-MODEL 3";
 /// Temporary files of writers that died are removed after this long.
 constexpr auto kStaleTemporary = std::chrono::hours(1);
 
@@ -38,6 +38,54 @@ uint64_t Checksum(const std::string& bytes) {
     hash *= 1099511628211ull;
   }
   return hash;
+}
+
+/// DerivedValues as bytes: the face count, the face areas, bbox and diagonal, every number as 8
+/// little-endian bytes (doubles bit for bit, so the values read back are the same).
+void PutWord(uint64_t word, std::string* out) {
+  for (int i = 0; i < 8; ++i) out->push_back(static_cast<char>((word >> (8 * i)) & 0xff));
+}
+
+void PutDouble(double value, std::string* out) {
+  uint64_t word;
+  std::memcpy(&word, &value, sizeof(word));
+  PutWord(word, out);
+}
+
+std::string EncodeDerived(const DerivedValues& derived) {
+  std::string out;
+  PutWord(derived.face_area.size(), &out);
+  for (double area : derived.face_area) PutDouble(area, &out);
+  for (double bound : derived.bbox) PutDouble(bound, &out);
+  PutDouble(derived.diagonal, &out);
+  return out;
+}
+
+/// The inverse of EncodeDerived; false when the bytes do not hold one.
+bool DecodeDerived(const std::string& bytes, DerivedValues* derived) {
+  std::size_t at = 0;
+  const auto word = [&](uint64_t* value) {
+    if (bytes.size() - at < 8) return false;
+    *value = 0;
+    for (int i = 0; i < 8; ++i)
+      *value |= static_cast<uint64_t>(static_cast<unsigned char>(bytes[at + i])) << (8 * i);
+    at += 8;
+    return true;
+  };
+  const auto real = [&](double* value) {
+    uint64_t bits;
+    if (!word(&bits)) return false;
+    std::memcpy(value, &bits, sizeof(bits));
+    return true;
+  };
+  uint64_t faces = 0;
+  if (!word(&faces) || faces != (bytes.size() - 8) / 8 - 7) return false;
+  derived->face_area.resize(faces);
+  for (double& area : derived->face_area)
+    if (!real(&area)) return false;
+  for (double& bound : derived->bbox)
+    if (!real(&bound)) return false;
+  return real(&derived->diagonal) && at == bytes.size();
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same directory, fsync, rename.
@@ -151,7 +199,7 @@ std::shared_ptr<const Model> ModelStore::Load(const std::string& key, ModelForma
   if (!std::getline(header, line) || line != kMagic) return discard("not an rdmesh entry");
   std::string format_name, unit, kind_name, occt;
   double scale = 1.0;
-  uint64_t size = 0, checksum = 0;
+  uint64_t size = 0, derived_size = 0, checksum = 0;
   while (std::getline(header, line) && !line.empty()) {
     const std::size_t eq = line.find('=');
     if (eq == std::string::npos) return discard("a damaged header");
@@ -163,24 +211,32 @@ std::shared_ptr<const Model> ModelStore::Load(const std::string& key, ModelForma
     if (field == "unit_scale_mm") scale = std::strtod(value.c_str(), nullptr);
     if (field == "payload") kind_name = value;
     if (field == "payload_bytes") size = std::strtoull(value.c_str(), nullptr, 10);
-    if (field == "payload_fnv1a64") checksum = std::strtoull(value.c_str(), nullptr, 16);
+    if (field == "derived_bytes") derived_size = std::strtoull(value.c_str(), nullptr, 10);
+    if (field == "body_fnv1a64") checksum = std::strtoull(value.c_str(), nullptr, 16);
   }
   if (!header) return discard("a truncated header");
   const std::size_t start = static_cast<std::size_t>(header.tellg());
-  if (bytes.size() - start != size) return discard("truncated (payload size differs)");
-  const std::string payload = bytes.substr(start);
-  if (Checksum(payload) != checksum) return discard("corrupt (checksum differs)");
+  if (bytes.size() - start != size + derived_size) {
+    return discard("truncated (" + std::to_string(bytes.size() - start) +
+                   " bytes after the header, " + std::to_string(size + derived_size) +
+                   " expected)");
+  }
+  const std::string body = bytes.substr(start);
+  if (Checksum(body) != checksum) return discard("corrupt (checksum differs)");
+  DerivedValues derived;
+  if (!DecodeDerived(body.substr(size), &derived)) return discard("damaged derived values");
   // Another OCCT may read the payload into other bits than the parse here would give.
   if (occt != OCC_VERSION_COMPLETE) return discard("written by OCCT " + occt);
   if (format_name != FormatName(format)) return discard("a " + format_name + " model");
   PayloadKind kind;
   if (!PayloadKindFromName(kind_name, &kind)) return discard("an unknown payload " + kind_name);
 
-  Result<ReadShape> read = ReadPayload(payload, kind);
+  Result<ReadShape> read = ReadPayload(body.substr(0, size), kind);
   if (!read.ok()) return discard(read.status().message());
   read->length_unit = unit;
   read->unit_scale_mm = scale;
-  Result<std::shared_ptr<const Model>> model = BuildModel(std::move(*read), format, name, name);
+  Result<std::shared_ptr<const Model>> model =
+      BuildModel(std::move(*read), format, name, name, &derived);
   if (!model.ok()) return discard(model.status().message());
   if (context != nullptr && context->ShouldStop()) return nullptr;
   utimensat(AT_FDCWD, path.c_str(), nullptr, 0);  // most recently used now
@@ -189,17 +245,21 @@ std::shared_ptr<const Model> ModelStore::Load(const std::string& key, ModelForma
 
 Status ModelStore::Save(const std::string& key, const CanonicalModel& model) const {
   const ModelInfo& info = model.model->info;
+  const std::string derived = EncodeDerived(DerivedValuesOf(*model.model));
+  std::string body;
+  body.reserve(model.payload.size() + derived.size());
+  body.append(model.payload).append(derived);
   std::ostringstream entry;
   char scale[64];
   std::snprintf(scale, sizeof(scale), "%.17g", info.unit_scale_mm);
   char checksum[32];
   std::snprintf(checksum, sizeof(checksum), "%016llx",
-                static_cast<unsigned long long>(Checksum(model.payload)));
+                static_cast<unsigned long long>(Checksum(body)));
   entry << kMagic << "\nformat=" << info.format << "\nocct=" << OCC_VERSION_COMPLETE
         << "\nlength_unit=" << info.length_unit << "\nunit_scale_mm=" << scale
         << "\npayload=" << PayloadKindName(model.kind) << "\npayload_bytes=" << model.payload.size()
-        << "\npayload_fnv1a64=" << checksum << "\n\n";
-  Status written = WriteAtomically(PathOf(key), entry.str() + model.payload);
+        << "\nderived_bytes=" << derived.size() << "\nbody_fnv1a64=" << checksum << "\n\n";
+  Status written = WriteAtomically(PathOf(key), entry.str() + body);
   if (!written.ok()) return written;
   Evict(key);
   return Status::Ok();

@@ -123,6 +123,15 @@ TEST_P(ModelStoreTest, StoredModelMeshesIdentically) {
   EXPECT_EQ(a.unique_faces, b.unique_faces);
   EXPECT_EQ(a.part_names, b.part_names);
   EXPECT_EQ(a.bbox, b.bbox);
+  EXPECT_EQ(a.diagonal, b.diagonal);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.solids, b.solids);
+  EXPECT_EQ(a.shells, b.shells);
+  EXPECT_EQ(a.surface_types, b.surface_types);
+  EXPECT_EQ(a.closed, b.closed);
+  // Stored with the entry, bit for bit.
+  EXPECT_EQ((*parsed)->face_area, (*stored)->face_area);
+  EXPECT_EQ((*parsed)->max_edge_tolerance, (*stored)->max_edge_tolerance);
   EXPECT_EQ(NamesAndColours(**parsed), NamesAndColours(**stored));
   for (const char* extension : {".msh", ".glb"}) {
     const std::string from_file = MeshBytes(**parsed, dir + "/file" + extension);

@@ -27,10 +27,11 @@ struct StoreOutcome {
 };
 
 /// Parsed models in a directory, one file per model: `<key>.rdm`, a small text header (format
-/// version, OCCT version, the model's format and units, the payload's size and FNV-1a checksum)
+/// version, OCCT version, the model's format and units, sizes and an FNV-1a checksum of the rest)
 /// followed by the payload of model_payload.h: the model as an XCAF document in OCCT's binary
 /// format (BinXCAF: names, colours and assembly structure survive), or as a BinTools shape for
-/// BREP models, which have no document.
+/// BREP models, which have no document; then the values that are slow to compute from it (exact
+/// face areas, the tight bounding box: DerivedValues in model.h), bit for bit.
 ///
 /// Every load of a model file goes through that payload (see ParseCanonical in model.h), and the
 /// store keeps exactly those bytes, so a model read from the store and one parsed from its file
