@@ -405,7 +405,7 @@ CallEnd CallWorker(WorkerProcess* worker, const WorkerSettings& settings,
   };
   wire::FromWorker reply;
   while (true) {
-    const FrameRead read = ReadFrame(worker->fd(), &reply, kPollMs);
+    const FrameRead read = worker->reader().Read(&reply, kPollMs);
     if (read == FrameRead::kMessage) {
       if (reply.has_done()) {
         end.phase = reply.done().phase();

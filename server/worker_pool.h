@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "frame.h"
 #include "log.h"
 #include "rdmesh/internal/worker.pb.h"
 #include "rdmesh/status.h"
@@ -47,6 +48,8 @@ class WorkerProcess {
 
   pid_t pid() const { return pid_; }
   int fd() const { return fd_; }
+  /// The buffered reader of fd(): every frame from the worker goes through it.
+  FrameReader& reader() { return reader_; }
 
   /// Whether the worker has parsed this model (as far as the daemon knows: the worker's own
   /// cache may have evicted it since, and then parses it again).
@@ -70,10 +73,11 @@ class WorkerProcess {
   bool killed() const { return killed_; }
 
  private:
-  WorkerProcess(pid_t pid, int fd) : pid_(pid), fd_(fd) {}
+  WorkerProcess(pid_t pid, int fd) : pid_(pid), fd_(fd), reader_(fd) {}
 
   pid_t pid_;
   int fd_;
+  FrameReader reader_;
   bool reaped_ = false;
   bool killed_ = false;
   int wait_status_ = 0;
