@@ -36,3 +36,13 @@ def test_second_daemon_reads_the_store(start_daemon, tmp_path):
     assert "'%s' parsed in" % EIGHT_CYL.name not in second.log()
     assert again.faces == uploaded.faces and list(again.bbox) == list(uploaded.bbox)
     assert _mesh_remote(second, EIGHT_CYL, tmp_path / "second.msh") == first_mesh
+
+
+def test_cli_and_daemon_share_entries(start_daemon, tmp_path):
+    store = tmp_path / "store"
+    daemon = start_daemon("--cache-dir", str(store))
+    daemon.client().upload(EIGHT_CYL)
+    completed = subprocess.run([CLI, "info", str(EIGHT_CYL), "--json", "--cache-dir", str(store)],
+                               capture_output=True, text=True, timeout=300)
+    assert completed.returncode == 0, completed.stderr
+    assert '"from_store":true' in completed.stdout.replace(" ", "")
