@@ -30,6 +30,8 @@ struct WorkerSettings {
   double cpu_seconds = 300.0;          ///< CPU time one call may use; 0 = no limit
   uint64_t cache_bytes = 1ull << 30;   ///< parsed models kept per worker, in model file bytes
   uint64_t max_model_bytes = 256ull << 20;
+  std::string store_dir;               ///< the persistent model store (--cache-dir); "" = none
+  uint64_t store_bytes = 10ull << 30;  ///< its size limit (--cache-dir-bytes); 0 = none
   std::string log_format = "text";
   std::string log_level = "info";
 };

@@ -128,7 +128,7 @@ Bnd_Box BoundingBox(const Model& model) {
 
 }  // namespace
 
-ModelInfo ComputeModelInfo(const Model& model) {
+ModelInfo ComputeModelInfo(const Model& model, bool bounding_box) {
   ModelInfo info;
   info.faces = model.face_count();
   info.edges = model.edge_count();
@@ -148,7 +148,8 @@ ModelInfo ComputeModelInfo(const Model& model) {
     ++info.surface_types[SurfaceTypeName(types[id - 1])];
   }
 
-  Bnd_Box box = BoundingBox(model);
+  Bnd_Box box;
+  if (bounding_box) box = BoundingBox(model);
   if (!box.IsVoid()) {
     box.Get(info.bbox[0], info.bbox[1], info.bbox[2], info.bbox[3], info.bbox[4], info.bbox[5]);
     double dx = info.bbox[3] - info.bbox[0], dy = info.bbox[4] - info.bbox[1],
