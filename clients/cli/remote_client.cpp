@@ -12,8 +12,8 @@
 #include <utility>
 
 #include "convert.h"
+#include "rdmesh/sha256.h"
 #include "rdmesh/v1/rdmesh.grpc.pb.h"
-#include "sha256.h"
 #include "status_map.h"
 
 namespace rdmesh::cli {
@@ -190,7 +190,7 @@ Result<MeshResult> MeshRemote(const std::string& address, const std::string& mod
   std::unique_ptr<pb::Rdmesh::Stub> stub = pb::Rdmesh::NewStub(*channel);
   Result<std::string> bytes = ReadFile(model_path);
   if (!bytes.ok()) return bytes.status();
-  const std::string model_id = server::Sha256Hex(*bytes);
+  const std::string model_id = Sha256Hex(*bytes);
 
   // Mesh the model by its id; upload it only when the server does not hold it (a new model, an
   // evicted one, or one whose replica is gone), then mesh again.

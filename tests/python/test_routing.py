@@ -178,7 +178,10 @@ def test_nginx_routes_each_model_to_one_replica_and_fails_over(tmp_path,
         # addresses (the ring is built from them): start again on other ports in the rare case
         # (about 0.4%) where all six models would land on one replica.
         for attempt in range(10):
-            daemons = [Daemon(tmp_path / ("replica-%d-%d.log" % (attempt, i))) for i in range(3)]
+            # One parsed-model store for the fleet (docs/SCALE.md), as the shared volume of
+            # docker/compose.yaml and deploy/k8s.
+            daemons = [Daemon(tmp_path / ("replica-%d-%d.log" % (attempt, i)),
+                              ["--cache-dir", str(tmp_path / "store")]) for i in range(3)]
             addresses = [d.address for d in daemons]
             ring = Ring(addresses)
             predicted = [addresses.index(ring.owner(model_id)) for model_id in ids]
@@ -297,11 +300,17 @@ def test_nginx_routes_each_model_to_one_replica_and_fails_over(tmp_path,
                 else:  # the next replica on the ring
                     assert addresses[served] == ring.owner(ids[k], dead=[addresses[victim]])
                 assert _mesh_bytes(result) == single_daemon_results[(str(m), i)], m.name
+        logs = "".join(d.log() for d in daemons)
         for k in range(len(models)):
-            parsed = len(re.findall("model %s '[^']*' parsed:" % ids[k][:12],
-                                    "".join(d.log() for d in daemons)))
-            # A moved model is parsed once more, on one survivor; the others not at all.
+            parsed = len(re.findall("model %s '[^']*' parsed:" % ids[k][:12], logs))
+            # A moved model is indexed once more, on one survivor; the others not at all.
             assert parsed - parsed_before[k] == (1 if k in moved else 0), models[k].name
+            # ... and its worker reads it from the shared store: no second STEP parse anywhere.
+            step_parses = len(re.findall("model %s '[^']*' parsed in" % ids[k][:12], logs))
+            from_store = len(re.findall("model %s '[^']*' read from the store in" % ids[k][:12],
+                                        logs))
+            assert step_parses == 1, models[k].name
+            assert from_store == (1 if k in moved else 0), models[k].name
         assert "connect() failed" in nginx.log()  # nginx did try the dead replica
         client.close()
     finally:
