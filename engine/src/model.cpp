@@ -12,10 +12,12 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <vector>
 
 #include "model_info.h"
 #include "model_payload.h"
 #include "model_readers.h"
+#include "parallel.h"
 
 namespace rdmesh {
 
@@ -61,16 +63,22 @@ void FindInstances(Model* model) {
   }
 }
 
+// A face placed like an earlier one (its representative) takes that face's area, scaled.
+bool CopiesAnEarlierFace(const Model& model, int id) {
+  const int rep = model.face_representative[id - 1];
+  return rep != id && rep < id;
+}
+
+// The exact areas, on all cores: each face on its own, then the copies in face order.
 void ComputeFaceAreas(Model* model) {
   int count = model->face_count();
   model->face_area.assign(count, 0.0);
+  std::vector<int> computed;
   for (int id = 1; id <= count; ++id) {
-    int rep = model->face_representative[id - 1];
-    double scale = model->face_placement[id - 1].ScaleFactor();
-    if (rep != id && rep < id) {
-      model->face_area[id - 1] = model->face_area[rep - 1] * scale * scale;
-      continue;
-    }
+    if (!CopiesAnEarlierFace(*model, id)) computed.push_back(id);
+  }
+  ParallelRunner(0).For(0, static_cast<int>(computed.size()), [&](int i) {
+    const int id = computed[i];
     try {
       GProp_GProps props;
       BRepGProp::SurfaceProperties(model->face(id), props);
@@ -78,6 +86,12 @@ void ComputeFaceAreas(Model* model) {
     } catch (const Standard_Failure&) {
       model->face_area[id - 1] = 0.0;  // a broken face: meshing will report it
     }
+  });
+  for (int id = 1; id <= count; ++id) {
+    if (!CopiesAnEarlierFace(*model, id)) continue;
+    const double scale = model->face_placement[id - 1].ScaleFactor();
+    model->face_area[id - 1] =
+        model->face_area[model->face_representative[id - 1] - 1] * scale * scale;
   }
 }
 
