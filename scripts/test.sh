@@ -5,14 +5,14 @@
 #   scripts/test.sh [ctest arguments...]
 #
 # Environment: BUILD_DIR (default build), JOBS (parallel build jobs, default: all cores),
-# RDMESH_SANITIZERS=0 skips the sanitizer build (CI runs it), RDMESH_TSAN=1 adds the TSan one,
+# RDMESH_SANITIZERS=0 skips the sanitizer builds (CI runs them), RDMESH_TSAN=0 skips only TSan,
 # RDMESH_FUZZ_SMOKE=0 skips the bounded fuzz run (CI runs it).
 #
 # After the Release tests, sanitizer builds of the engine and server tests run (gcc's runtimes;
 # options and suppressions in scripts/sanitizers/, see its README.md):
 #   build-asan/  ASan + UBSan: engine_tests and server_tests, whole (always, unless skipped)
-#   build-tsan/  TSan: the threaded tests (engine at 1 and 2 threads, concurrent loads and jobs);
-#                only with RDMESH_TSAN=1 until it has passed a full run (see the README there)
+#   build-tsan/  TSan: the threaded tests (engine at 1 and 2 threads, its parallel loops, concurrent
+#                loads and jobs); under TSan the engine's loops run on std::threads (README there)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${BUILD_DIR:-build}
@@ -69,8 +69,8 @@ run_sanitized "ASan+UBSan engine_tests" build-asan/bin/engine_tests
 run_sanitized "ASan+UBSan server_tests" build-asan/bin/server_tests
 unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
 
-if [ "${RDMESH_TSAN:-0}" != 1 ]; then
-  echo "test.sh: sanitizer build passed (TSan not run: RDMESH_TSAN=1 adds it)"
+if [ "${RDMESH_TSAN:-1}" = 0 ]; then
+  echo "test.sh: ASan+UBSan build passed (TSan skipped: RDMESH_TSAN=0)"
   exit 0
 fi
 
@@ -79,7 +79,7 @@ fi
 sanitizer_build build-tsan thread
 export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$sanitizers/tsan.supp"
 run_sanitized "TSan engine_tests (threaded)" build-tsan/bin/engine_tests \
-  --gtest_filter='Data/CorpusTest.*:PipelineTest.*:Deadline/*:ModelTest.ConcurrentLoadsAgree:ContextTest.*'
+  --gtest_filter='Data/CorpusTest.*:PipelineTest.*:Deadline/*:ModelTest.ConcurrentLoadsAgree:ContextTest.*:ParallelRunnerTest.*'
 run_sanitized "TSan server_tests" build-tsan/bin/server_tests
 unset TSAN_OPTIONS
 echo "test.sh: sanitizer builds passed"
