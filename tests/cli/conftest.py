@@ -70,15 +70,22 @@ def run(cli):
     return run_cli
 
 
+def _npm_package(name):
+    """The build tree's node_tools directory, with the npm package `name` installed in it (on
+    first use)."""
+    node_dir = _env_path("RDMESH_NODE_DIR")
+    if not (node_dir / "node_modules" / name).is_dir():
+        node_dir.mkdir(parents=True, exist_ok=True)
+        subprocess.run(["npm", "install", "--prefix", str(node_dir), "--no-audit", "--no-fund",
+                        name], check=True, capture_output=True, timeout=600)
+    return node_dir
+
+
 @pytest.fixture(scope="session")
 def gltf_validate():
     """Validates a .glb with the Khronos glTF validator (npm gltf-validator, installed on first
     use under the build tree)."""
-    node_dir = _env_path("RDMESH_NODE_DIR")
-    if not (node_dir / "node_modules" / "gltf-validator").is_dir():
-        node_dir.mkdir(parents=True, exist_ok=True)
-        subprocess.run(["npm", "install", "--prefix", str(node_dir), "--no-audit", "--no-fund",
-                        "gltf-validator"], check=True, capture_output=True, timeout=600)
+    node_dir = _npm_package("gltf-validator")
     script = node_dir / "validate_gltf.js"
     script.write_text(GLTF_VALIDATE_JS)
 
@@ -109,3 +116,56 @@ def meshbench(shared_dir):
         return json.loads(completed.stdout.strip().splitlines()[-1])
 
     return evaluate
+
+
+THREE_LOAD_MJS = r"""
+import fs from 'fs';
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+const bytes = fs.readFileSync(process.argv[2]);
+const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+new GLTFLoader().parse(buffer, '', (gltf) => {
+  gltf.scene.updateMatrixWorld(true);
+  const objects = [];
+  gltf.scene.traverse((o) => {
+    if (!o.isMesh && !o.isLineSegments) return;
+    const g = o.geometry;
+    const item = {kind: o.isMesh ? 'triangles' : 'lines', name: o.name,
+                  attributes: Object.keys(g.attributes),
+                  position: Array.from(g.attributes.position.clone().applyMatrix4(o.matrixWorld).array),
+                  index: g.index ? Array.from(g.index.array) : null};
+    if (g.attributes.normal) {
+      const matrix = new THREE.Matrix3().getNormalMatrix(o.matrixWorld);
+      item.normal = Array.from(g.attributes.normal.clone().applyNormalMatrix(matrix).array);
+    }
+    // GLTFLoader names a custom attribute _FOO as the lower-case _foo.
+    if (g.attributes._face_id) item.face_id = Array.from(g.attributes._face_id.array);
+    if (g.attributes._edge_id) item.edge_id = Array.from(g.attributes._edge_id.array);
+    objects.push(item);
+  });
+  console.log(JSON.stringify({extras: gltf.parser.json.extras || null,
+                              primitives: gltf.parser.json.meshes.map((m) => m.primitives.map(
+                                  (p) => ({mode: p.mode === undefined ? 4 : p.mode,
+                                           extras: p.extras || null}))),
+                              objects}));
+}, (error) => { console.error(String(error)); process.exit(1); });
+"""
+
+
+@pytest.fixture(scope="session")
+def three_load():
+    """Loads a .glb with three.js's GLTFLoader in node (npm three, installed on first use under
+    the build tree): -> dict with the file's root `extras`, every mesh's primitives (mode,
+    extras) and every drawn object (`triangles` or `lines`) with world-space positions (metres,
+    +Y up), normals, index and the _face_id / _edge_id attributes as three.js reads them."""
+    node_dir = _npm_package("three")
+    script = node_dir / "three_load.mjs"
+    script.write_text(THREE_LOAD_MJS)
+
+    def load(path):
+        completed = subprocess.run(["node", str(script), str(path)], capture_output=True,
+                                   text=True, timeout=300, cwd=node_dir)
+        assert completed.returncode == 0, completed.stderr
+        return json.loads(completed.stdout)
+
+    return load
