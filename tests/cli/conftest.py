@@ -70,32 +70,32 @@ def run(cli):
     return run_cli
 
 
-def _npm_package(name):
-    """The build tree's node_tools directory, with the npm package `name` installed in it (on
-    first use)."""
+def _node_script(package, name, source):
+    """A function running the node script `source` (saved as `name` in the build tree's
+    node_tools directory, where the npm `package` is installed on first use) on a path and
+    returning its JSON output."""
     node_dir = _env_path("RDMESH_NODE_DIR")
-    if not (node_dir / "node_modules" / name).is_dir():
+    if not (node_dir / "node_modules" / package).is_dir():
         node_dir.mkdir(parents=True, exist_ok=True)
         subprocess.run(["npm", "install", "--prefix", str(node_dir), "--no-audit", "--no-fund",
-                        name], check=True, capture_output=True, timeout=600)
-    return node_dir
+                        package], check=True, capture_output=True, timeout=600)
+    script = node_dir / name
+    script.write_text(source)
+
+    def run_script(path):
+        completed = subprocess.run(["node", str(script), str(path)], capture_output=True,
+                                   text=True, timeout=300, cwd=node_dir)
+        assert completed.returncode == 0, completed.stderr
+        return json.loads(completed.stdout)
+
+    return run_script
 
 
 @pytest.fixture(scope="session")
 def gltf_validate():
     """Validates a .glb with the Khronos glTF validator (npm gltf-validator, installed on first
     use under the build tree)."""
-    node_dir = _npm_package("gltf-validator")
-    script = node_dir / "validate_gltf.js"
-    script.write_text(GLTF_VALIDATE_JS)
-
-    def validate(path):
-        completed = subprocess.run(["node", str(script), str(path)], capture_output=True,
-                                   text=True, timeout=300, cwd=node_dir)
-        assert completed.returncode == 0, completed.stderr
-        return json.loads(completed.stdout)
-
-    return validate
+    return _node_script("gltf-validator", "validate_gltf.js", GLTF_VALIDATE_JS)
 
 
 @pytest.fixture(scope="session")
@@ -158,14 +158,4 @@ def three_load():
     the build tree): -> dict with the file's root `extras`, every mesh's primitives (mode,
     extras) and every drawn object (`triangles` or `lines`) with world-space positions (metres,
     +Y up), normals, index and the _face_id / _edge_id attributes as three.js reads them."""
-    node_dir = _npm_package("three")
-    script = node_dir / "three_load.mjs"
-    script.write_text(THREE_LOAD_MJS)
-
-    def load(path):
-        completed = subprocess.run(["node", str(script), str(path)], capture_output=True,
-                                   text=True, timeout=300, cwd=node_dir)
-        assert completed.returncode == 0, completed.stderr
-        return json.loads(completed.stdout)
-
-    return load
+    return _node_script("three", "three_load.mjs", THREE_LOAD_MJS)
