@@ -143,6 +143,7 @@ Result<MeshResult> MeshRemote(const std::string& address, const std::string& mod
   request.mutable_return_fields()->set_uv(true);
   request.mutable_return_fields()->set_normals(true);
   request.mutable_return_fields()->set_node_topology(true);
+  request.mutable_return_fields()->set_edges(true);  // the edge lines, as a local run has them
   grpc::ClientContext call;
   if (Status token = AddToken(&call); !token.ok()) return token;
   server::MeshResultBuilder builder;
