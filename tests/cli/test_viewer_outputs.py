@@ -160,18 +160,16 @@ def test_glb_for_viewers(run, data_dir, tmp_path, gltf_validate, three_load, mod
 def test_glb_for_viewers_bar_model(run, shared_dir, tmp_path, gltf_validate, three_load):
     """The issue's bar on its model; skipped only when the shared corpus is not on this
     machine. Its edge 1 bounds no face (Gmsh: no surface above curve 1), so the edges are
-    compared with the .msh's line elements. Its spheres have poles on the edges to cylinders,
-    where the engine's node normal is the mean of four normals around the pole (Surface::Normal
-    where the surface's derivatives vanish): measured 0.88 degrees off the exact normal there,
-    hence the 1 degree tolerance."""
+    compared with the .msh's line elements. Its spheres have poles on the edges to cylinders:
+    their normals there are the exact ones too (a mean of normals around the pole was 0.88
+    degrees off)."""
     model = shared_dir / "corpus" / CORPUS_MODEL
     if not model.is_file():
         pytest.skip(f"{model} is absent")
     msh = tmp_path / "out.msh"
     assert run("mesh", model, "-o", msh, "-q").code == 0
     lines, _ = gmsh_lines(msh)
-    check_glb(run, model, tmp_path, gltf_validate, three_load, edge_ids_in_msh=set(lines),
-              normal_tolerance=1.0)
+    check_glb(run, model, tmp_path, gltf_validate, three_load, edge_ids_in_msh=set(lines))
 
 
 def test_glb_no_edges(run, data_dir, tmp_path, gltf_validate, three_load):
