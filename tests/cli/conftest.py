@@ -140,6 +140,14 @@ new GLTFLoader().parse(buffer, '', (gltf) => {
     }
     // GLTFLoader names a custom attribute _FOO as the lower-case _foo.
     if (g.attributes._face_id) item.face_id = Array.from(g.attributes._face_id.array);
+    // A node drawing an instanced part's mesh at another instance maps the ids (node extras
+    // become userData, on the mesh or on the group of its primitives).
+    for (let p = o; p; p = p.parent) {
+      if (p.userData && p.userData.rdmesh && p.userData.rdmesh.face_ids) {
+        item.face_map = p.userData.rdmesh.face_ids;
+        break;
+      }
+    }
     if (g.attributes._edge_id) item.edge_id = Array.from(g.attributes._edge_id.array);
     objects.push(item);
   });
@@ -157,5 +165,6 @@ def three_load():
     """Loads a .glb with three.js's GLTFLoader in node (npm three, installed on first use under
     the build tree): -> dict with the file's root `extras`, every mesh's primitives (mode,
     extras) and every drawn object (`triangles` or `lines`) with world-space positions (metres,
-    +Y up), normals, index and the _face_id / _edge_id attributes as three.js reads them."""
+    +Y up), normals, index, the _face_id / _edge_id attributes as three.js reads them and the
+    instance's `face_map` (extras.rdmesh.face_ids of its node) when there is one."""
     return _node_script("three", "three_load.mjs", THREE_LOAD_MJS)

@@ -49,6 +49,9 @@ def check_glb(run, model, tmp_path, gltf_validate, three_load, edge_ids_in_msh=N
     assert "_FACE_ID" in notes and "_EDGE_ID" in notes
     triangles = [o for o in loaded["objects"] if o["kind"] == "triangles"]
     lines = [o for o in loaded["objects"] if o["kind"] == "lines"]
+    for o in triangles:  # an instance's own face ids
+        if "face_map" in o:
+            o["face_id"] = [o["face_map"].get(str(int(f)), f) for f in o["face_id"]]
 
     # Picking: each triangle's three vertices carry one face id; every face is there with the
     # triangle count the run reported.
@@ -170,6 +173,35 @@ def test_glb_for_viewers_bar_model(run, shared_dir, tmp_path, gltf_validate, thr
     assert run("mesh", model, "-o", msh, "-q").code == 0
     lines, _ = gmsh_lines(msh)
     check_glb(run, model, tmp_path, gltf_validate, three_load, edge_ids_in_msh=set(lines))
+
+
+def test_glb_instanced_assembly(run, shared_dir, tmp_path, gltf_validate, three_load):
+    """An assembly whose parts are placed several times: each drawn instance maps the stored
+    mesh's face ids to its own (extras.rdmesh.face_ids of its node), so the ids still cover
+    every face once, with its triangle count; skipped only without the shared corpus."""
+    model = shared_dir / "corpus" / "gmsh_presse_asm.step"
+    if not model.is_file():
+        pytest.skip(f"{model} is absent")
+    info = run("info", model, "--json").json
+    assert info["unique_faces"] < info["faces"]
+    glb = tmp_path / "assembly.glb"
+    result = run("mesh", model, "-o", glb, "--json", "--timeout", "300")
+    assert result.code == 0, result.stderr
+    assert gltf_validate(glb)["errors"] == 0
+    loaded = three_load(glb)
+    per_face = {}
+    mapped = 0
+    for o in loaded["objects"]:
+        if o["kind"] != "triangles":
+            continue
+        face_map = o.get("face_map", {})
+        mapped += bool(face_map)
+        face_id = np.array([face_map.get(str(int(f)), f) for f in o["face_id"]], dtype=int)
+        for f, count in zip(*np.unique(face_id[np.array(o["index"])[::3]], return_counts=True)):
+            per_face[int(f)] = per_face.get(int(f), 0) + int(count)
+    assert mapped > 0
+    assert per_face == {f["id"]: f["triangles"] for f in result.json["faces"]
+                        if f["triangles"] > 0}
 
 
 def test_glb_no_edges(run, data_dir, tmp_path, gltf_validate, three_load):

@@ -15,10 +15,12 @@
 #include <STEPControl_Writer.hxx>
 #include <TDataStd_Name.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -559,6 +561,34 @@ TEST_F(WritersTest, InstancesShareOneGltfMesh) {
   EXPECT_EQ(glb.drawn_triangles, triangles);
   EXPECT_EQ(glb.stored_meshes, 1u);  // stored once, placed twice
   EXPECT_NE(glb.json.dump().find("brick"), std::string::npos);
+  // The stored mesh's _FACE_ID are the lent instance's (faces 1..6); the node that draws it at
+  // the other instance maps them to that instance's faces, each the lent face moved by +100 x.
+  int mapped_nodes = 0;
+  for (const auto& node : glb.json["nodes"]) {
+    if (!node.contains("mesh")) continue;
+    if (!node.contains("extras")) continue;
+    ++mapped_nodes;
+    const auto& map = node["extras"]["rdmesh"]["face_ids"];
+    ASSERT_EQ(map.size(), 6u);
+    std::set<int> to;
+    for (const auto& [from, own] : map.items()) {
+      const int lent = std::stoi(from), face = own.get<int>();
+      EXPECT_TRUE(lent >= 1 && lent <= 6) << lent;
+      to.insert(face);
+      std::set<std::array<double, 3>> moved, own_corners;
+      for (TopExp_Explorer it(model->face(lent), TopAbs_VERTEX); it.More(); it.Next()) {
+        gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(it.Current()));
+        moved.insert({std::round(p.X() + 100.0), std::round(p.Y()), std::round(p.Z())});
+      }
+      for (TopExp_Explorer it(model->face(face), TopAbs_VERTEX); it.More(); it.Next()) {
+        gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(it.Current()));
+        own_corners.insert({std::round(p.X()), std::round(p.Y()), std::round(p.Z())});
+      }
+      EXPECT_EQ(own_corners, moved) << lent << " -> " << face;
+    }
+    EXPECT_EQ(to, (std::set<int>{7, 8, 9, 10, 11, 12}));
+  }
+  EXPECT_EQ(mapped_nodes, 1);
 
   ASSERT_TRUE(WriteMesh(*model, result, Path("pair.obj")).ok());
   Obj obj = ReadObj(Path("pair.obj"));

@@ -5,6 +5,7 @@
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -203,6 +204,118 @@ Status FaceIds(Glb* glb, const std::string& path) {
   return Status::Ok();
 }
 
+// The floats of accessor `a` (`components` per element), read through its buffer view's stride.
+std::vector<float> ReadFloats(const Glb& glb, int a, int components) {
+  const Json& accessor = glb.json["accessors"][a];
+  const Json& view = glb.json["bufferViews"][accessor["bufferView"].get<int>()];
+  const size_t element = sizeof(float) * components;
+  const size_t stride = view.value("byteStride", element);
+  const size_t start =
+      view.value("byteOffset", size_t{0}) + accessor.value("byteOffset", size_t{0});
+  const size_t count = accessor["count"].get<size_t>();
+  std::vector<float> values(count * components);
+  if (accessor.value("componentType", 0) != kFloat ||
+      (count > 0 && start + (count - 1) * stride + element > glb.bin.size()))
+    return {};
+  for (size_t i = 0; i < count; ++i)
+    std::memcpy(&values[i * components], glb.bin.data() + start + i * stride, element);
+  return values;
+}
+
+// A glTF node's transform as a 3x4 row-major matrix (rotation and scale, then translation).
+using Affine = std::array<double, 12>;
+
+Affine Compose(const Affine& a, const Affine& b) {  // a after b
+  Affine c{};
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 4; ++k) {
+      double sum = k == 3 ? a[4 * r + 3] : 0.0;
+      for (int j = 0; j < 3; ++j) sum += a[4 * r + j] * b[4 * j + k];
+      c[4 * r + k] = sum;
+    }
+  return c;
+}
+
+Affine NodeTransform(const Json& node) {
+  Affine m = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+  if (node.contains("matrix")) {  // column-major 4x4
+    const Json& x = node["matrix"];
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 4; ++k) m[4 * r + k] = x[4 * k + r].get<double>();
+    return m;
+  }
+  if (node.contains("rotation")) {
+    const Json& q = node["rotation"];
+    const double x = q[0], y = q[1], z = q[2], w = q[3];
+    m = {1 - 2 * (y * y + z * z), 2 * (x * y - z * w),     2 * (x * z + y * w),     0,
+         2 * (x * y + z * w),     1 - 2 * (x * x + z * z), 2 * (y * z - x * w),     0,
+         2 * (x * z - y * w),     2 * (y * z + x * w),     1 - 2 * (x * x + y * y), 0};
+  }
+  if (node.contains("scale"))
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) m[4 * r + k] *= node["scale"][k].get<double>();
+  if (node.contains("translation"))
+    for (int r = 0; r < 3; ++r) m[4 * r + 3] = node["translation"][r].get<double>();
+  return m;
+}
+
+// An instanced part's mesh carries the face ids of the instance it was lent from (_FACE_ID).
+// Each node that draws such a mesh elsewhere gets extras.rdmesh.face_ids: {"lent id": its own
+// face id}, found by carrying a vertex of each lent face to the model's frame through the
+// node's world transform and picking the instance face with a node nearest to it.
+void InstanceFaceIds(Glb* glb, const Model& model, const MeshResult& result) {
+  Json& json = glb->json;
+  if (!json.contains("nodes") || !json.contains("scenes")) return;
+  std::map<int, std::vector<int>> instances;  // representative -> faces with a mesh
+  for (int f = 1; f <= model.face_count(); ++f)
+    if (static_cast<size_t>(f) <= result.faces.size() && result.faces[f - 1].node_count() > 0)
+      instances[model.face_representative[f - 1]].push_back(f);
+  std::vector<std::pair<int, Affine>> stack;
+  for (const Json& root : json["scenes"][json.value("scene", 0)]["nodes"])
+    stack.push_back({root.get<int>(), Affine{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}});
+  while (!stack.empty()) {
+    auto [index, parent] = stack.back();
+    stack.pop_back();
+    Json& node = json["nodes"][index];
+    const Affine world = Compose(parent, NodeTransform(node));
+    if (node.contains("children"))
+      for (const Json& child : node["children"]) stack.push_back({child.get<int>(), world});
+    if (!node.contains("mesh")) continue;
+    Json map = Json::object();
+    for (const Json& primitive : json["meshes"][node["mesh"].get<int>()]["primitives"]) {
+      const Json& attributes = primitive["attributes"];
+      if (!attributes.contains("_FACE_ID") || !attributes.contains("POSITION")) continue;
+      std::vector<float> ids = ReadFloats(*glb, attributes["_FACE_ID"].get<int>(), 1);
+      std::vector<float> xyz = ReadFloats(*glb, attributes["POSITION"].get<int>(), 3);
+      if (xyz.size() != 3 * ids.size()) continue;
+      std::set<int> done;
+      for (size_t i = 0; i < ids.size(); ++i) {
+        const int lent = static_cast<int>(ids[i]);
+        if (!done.insert(lent).second || lent < 1 || lent > model.face_count()) continue;
+        const auto found = instances.find(model.face_representative[lent - 1]);
+        if (found == instances.end() || found->second.size() < 2) continue;
+        double g[3];  // glTF world, metres, +Y up
+        for (int r = 0; r < 3; ++r)
+          g[r] = world[4 * r] * xyz[3 * i] + world[4 * r + 1] * xyz[3 * i + 1] +
+                 world[4 * r + 2] * xyz[3 * i + 2] + world[4 * r + 3];
+        const double p[3] = {1000.0 * g[0], -1000.0 * g[2], 1000.0 * g[1]};  // model frame, mm
+        int best = lent;
+        double best_distance = std::numeric_limits<double>::infinity();
+        for (int f : found->second) {
+          const std::vector<double>& q = result.faces[f - 1].xyz;
+          for (size_t k = 0; k + 2 < q.size(); k += 3) {
+            const double d = (q[k] - p[0]) * (q[k] - p[0]) + (q[k + 1] - p[1]) * (q[k + 1] - p[1]) +
+                             (q[k + 2] - p[2]) * (q[k + 2] - p[2]);
+            if (d < best_distance) best_distance = d, best = f;
+          }
+        }
+        if (best != lent) map[std::to_string(lent)] = best;
+      }
+    }
+    if (!map.empty()) node["extras"]["rdmesh"]["face_ids"] = map;
+  }
+}
+
 // The solid id (1..S) each edge line is drawn with: the lowest solid holding the edge, or 0.
 std::vector<int> EdgeSolids(const Model& model, const std::vector<EdgeLine>& edges,
                             int* solid_count) {
@@ -305,13 +418,15 @@ void EdgeNodes(Glb* glb, const Model& model, const Mesh& mesh, const std::vector
 
 }  // namespace
 
-Status AddGltfIdsAndEdges(const Model& model, const Mesh& mesh, const std::vector<EdgeLine>& edges,
-                          const std::string& path) {
+Status AddGltfIdsAndEdges(const Model& model, const MeshResult& result,
+                          const std::vector<EdgeLine>& edges, const std::string& path) {
+  const Mesh& mesh = result.mesh;
   Result<Glb> read = ReadGlbFile(path);
   if (!read.ok()) return read.status();
   Glb& glb = *read;
   Status ids = FaceIds(&glb, path);
   if (!ids.ok()) return ids;
+  InstanceFaceIds(&glb, model, result);
   if (!edges.empty()) EdgeNodes(&glb, model, mesh, edges);
   Json degenerate = Json::array();
   for (const EdgeLine& line : edges)
@@ -319,8 +434,8 @@ Status AddGltfIdsAndEdges(const Model& model, const Mesh& mesh, const std::vecto
   glb.json["extras"]["rdmesh"] = {
       {"_FACE_ID",
        "per vertex of every triangle primitive: the B-rep face id (1..F, rdmesh's face ids) of "
-       "the face the triangle belongs to; an instanced part's mesh carries its first instance's "
-       "ids"},
+       "the face the triangle belongs to; a node drawing an instanced part's mesh at another "
+       "instance has extras.rdmesh.face_ids mapping those ids to its own faces' ids"},
       {"_EDGE_ID",
        "per vertex of the LINES primitives under the node 'edges': the B-rep edge id (1..E); "
        "each primitive's extras.edges lists its edges with their faces, seam and sharp flags and "

@@ -30,7 +30,7 @@ Status WriteGlb(const Model& model, const MeshResult& result, const std::vector<
   } catch (const Standard_Failure& failure) {
     return WriteError(path, std::string("the glTF writer failed: ") + failure.GetMessageString());
   }
-  return AddGltfIdsAndEdges(model, result.mesh, edges, path);
+  return AddGltfIdsAndEdges(model, result, edges, path);
 }
 
 }  // namespace rdmesh
