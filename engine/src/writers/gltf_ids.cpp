@@ -261,15 +261,22 @@ Affine NodeTransform(const Json& node) {
 
 // An instanced part's mesh carries the face ids of the instance it was lent from (_FACE_ID).
 // Each node that draws such a mesh elsewhere gets extras.rdmesh.face_ids: {"lent id": its own
-// face id}, found by carrying a vertex of each lent face to the model's frame through the
-// node's world transform and picking the instance face with a node nearest to it.
+// face id}: the centroid of each lent face's vertices, carried to the model's frame through the
+// node's world transform, picks the instance face whose node centroid is nearest (one distance
+// per instance, so a part placed n times costs n^2 per face, not n^2 per node).
 void InstanceFaceIds(Glb* glb, const Model& model, const MeshResult& result) {
   Json& json = glb->json;
   if (!json.contains("nodes") || !json.contains("scenes")) return;
   std::map<int, std::vector<int>> instances;  // representative -> faces with a mesh
-  for (int f = 1; f <= model.face_count(); ++f)
-    if (static_cast<size_t>(f) <= result.faces.size() && result.faces[f - 1].node_count() > 0)
-      instances[model.face_representative[f - 1]].push_back(f);
+  std::vector<std::array<double, 3>> centroid(model.face_count() + 1, {0.0, 0.0, 0.0});
+  for (int f = 1; f <= model.face_count(); ++f) {
+    if (static_cast<size_t>(f) > result.faces.size()) break;
+    const std::vector<double>& q = result.faces[f - 1].xyz;
+    if (q.empty()) continue;
+    instances[model.face_representative[f - 1]].push_back(f);
+    for (size_t k = 0; k + 2 < q.size(); k += 3)
+      for (int c = 0; c < 3; ++c) centroid[f][c] += q[k + c] / static_cast<double>(q.size() / 3);
+  }
   std::vector<std::pair<int, Affine>> stack;
   for (const Json& root : json["scenes"][json.value("scene", 0)]["nodes"])
     stack.push_back({root.get<int>(), Affine{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}});
@@ -288,26 +295,29 @@ void InstanceFaceIds(Glb* glb, const Model& model, const MeshResult& result) {
       std::vector<float> ids = ReadFloats(*glb, attributes["_FACE_ID"].get<int>(), 1);
       std::vector<float> xyz = ReadFloats(*glb, attributes["POSITION"].get<int>(), 3);
       if (xyz.size() != 3 * ids.size()) continue;
-      std::set<int> done;
+      std::map<int, std::array<double, 4>> sums;  // lent face -> sum of x y z, count
       for (size_t i = 0; i < ids.size(); ++i) {
-        const int lent = static_cast<int>(ids[i]);
-        if (!done.insert(lent).second || lent < 1 || lent > model.face_count()) continue;
+        std::array<double, 4>& sum = sums[static_cast<int>(ids[i])];
+        for (int c = 0; c < 3; ++c) sum[c] += xyz[3 * i + c];
+        sum[3] += 1.0;
+      }
+      for (const auto& [lent, sum] : sums) {
+        if (lent < 1 || lent > model.face_count()) continue;
         const auto found = instances.find(model.face_representative[lent - 1]);
         if (found == instances.end() || found->second.size() < 2) continue;
-        double g[3];  // glTF world, metres, +Y up
+        double g[3];  // the centroid in glTF's world, metres, +Y up
         for (int r = 0; r < 3; ++r)
-          g[r] = world[4 * r] * xyz[3 * i] + world[4 * r + 1] * xyz[3 * i + 1] +
-                 world[4 * r + 2] * xyz[3 * i + 2] + world[4 * r + 3];
+          g[r] = (world[4 * r] * sum[0] + world[4 * r + 1] * sum[1] + world[4 * r + 2] * sum[2]) /
+                     sum[3] +
+                 world[4 * r + 3];
         const double p[3] = {1000.0 * g[0], -1000.0 * g[2], 1000.0 * g[1]};  // model frame, mm
         int best = lent;
         double best_distance = std::numeric_limits<double>::infinity();
         for (int f : found->second) {
-          const std::vector<double>& q = result.faces[f - 1].xyz;
-          for (size_t k = 0; k + 2 < q.size(); k += 3) {
-            const double d = (q[k] - p[0]) * (q[k] - p[0]) + (q[k + 1] - p[1]) * (q[k + 1] - p[1]) +
-                             (q[k + 2] - p[2]) * (q[k + 2] - p[2]);
-            if (d < best_distance) best_distance = d, best = f;
-          }
+          const std::array<double, 3>& q = centroid[f];
+          const double d = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
+                           (q[2] - p[2]) * (q[2] - p[2]);
+          if (d < best_distance) best_distance = d, best = f;
         }
         if (best != lent) map[std::to_string(lent)] = best;
       }
