@@ -10,11 +10,14 @@ through one rdmeshd or another (e.g. a build from before the worker processes), 
 Every daemon runs on its own loopback port with the same flags; each model is uploaded (and so
 parsed) once per daemon and meshed once to warm up. The timed calls then alternate between the
 daemons, round after round, so that both see the same machine. Reports per model and daemon the
-median and 90th percentile of the call's wall time (request sent to Summary received) and the
-ratio to the first daemon's median.
+median and 90th percentile of the call's wall time (request sent to Summary received), the
+ratio to the first daemon's median, and the median CPU time the call cost the daemon's process
+tree (the daemon and its worker processes, from /proc): on a busy machine the CPU time is the
+steadier figure.
 """
 
 import argparse
+import os
 import pathlib
 import re
 import statistics
@@ -29,6 +32,30 @@ from rdmesh import Client  # noqa: E402
 
 DEFAULT_MODELS = [REPO / "tests" / "data" / "cq_red_cube_blue_cylinder.step",
                   REPO.parent / "shared" / "corpus" / "nist_mbe_pmi_2.stp"]
+
+
+def tree_cpu_seconds(root):
+    """User + system CPU seconds of `root` and of every process below it (reaped ones included,
+    through the root's cutime/cstime), from /proc."""
+    stats = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            text = pathlib.Path("/proc", entry, "stat").read_text()
+        except OSError:
+            continue
+        fields = text[text.rindex(")") + 2:].split()  # after "pid (comm) "
+        stats[int(entry)] = (int(fields[1]), [int(f) for f in fields[11:15]])
+    total, todo = 0, [root]
+    while todo:
+        pid = todo.pop()
+        if pid not in stats:
+            continue
+        utime, stime, cutime, cstime = stats[pid][1]
+        total += utime + stime + (cutime + cstime if pid == root else 0)
+        todo.extend(child for child, (ppid, _) in stats.items() if ppid == pid)
+    return total / os.sysconf("SC_CLK_TCK")
 
 
 def start(binary, log_path, threads):
@@ -68,27 +95,33 @@ def main():
                 client.mesh(info, max_deviation_rel=args.rel)  # warm-up
                 models[(label, path)] = info
         times = {key: [] for key in models}
+        cpu = {key: [] for key in models}
         triangles = {}
         for _ in range(args.rounds):
             for path in args.models:
-                for label, _, client in daemons:
+                for label, proc, client in daemons:
+                    start_cpu = tree_cpu_seconds(proc.pid)
                     start_time = time.perf_counter()
                     result = client.mesh(models[(label, path)], max_deviation_rel=args.rel)
                     times[(label, path)].append(time.perf_counter() - start_time)
+                    cpu[(label, path)].append(tree_cpu_seconds(proc.pid) - start_cpu)
                     triangles[(label, path)] = result.summary.triangles
         print("Mesh call wall time on a cached model, %d rounds, max_deviation_rel %g, "
               "--threads %d" % (args.rounds, args.rel, args.threads))
-        print("| model | daemon | triangles | median s | p90 s | ratio |")
-        print("|---|---|---:|---:|---:|---:|")
+        print("| model | daemon | triangles | median s | p90 s | ratio | CPU s (daemon + workers) "
+              "| CPU ratio |")
+        print("|---|---|---:|---:|---:|---:|---:|---:|")
         for path in args.models:
             base = statistics.median(times[(daemons[0][0], path)])
+            base_cpu = statistics.median(cpu[(daemons[0][0], path)])
             for label, _, _ in daemons:
                 samples = sorted(times[(label, path)])
                 median = statistics.median(samples)
                 p90 = samples[min(len(samples) - 1, int(0.9 * len(samples)))]
-                print("| %s | %s | %d | %.4f | %.4f | %.3f |" % (
+                cpu_median = statistics.median(cpu[(label, path)])
+                print("| %s | %s | %d | %.4f | %.4f | %.3f | %.3f | %.3f |" % (
                     pathlib.Path(path).name, label, triangles[(label, path)], median, p90,
-                    median / base))
+                    median / base, cpu_median, cpu_median / base_cpu if base_cpu else 0.0))
     finally:
         for _, proc, client in daemons:
             client.close()

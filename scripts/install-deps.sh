@@ -8,8 +8,8 @@
 #
 # The default set holds everything that scripts/test.sh builds, imports or runs: the Python
 # modules the pytest suites import (gmsh, meshio, numpy, grpc, protobuf), the programs they call
-# (openssl, protoc with the Python gRPC plugin, node and npm for the glTF validator and three.js,
-# whose npm packages tests/cli installs under the build tree on first use) and the
+# (openssl, nginx, protoc with the Python gRPC plugin, node and npm for the glTF validator and
+# three.js, whose npm packages tests/cli installs under the build tree on first use) and the
 # sanitizer runtimes of the ASan/UBSan and TSan builds (gcc's, pulled in by build-essential).
 set -euo pipefail
 
@@ -31,8 +31,9 @@ build_pkgs=(
   # The bounded libFuzzer run of scripts/test.sh (scripts/fuzz_smoke.sh): clang and its runtimes,
   # gdb to read where a crash inside OCCT happened.
   clang libclang-rt-14-dev gdb
-  # Test-time imports and programs (tests/cli, tests/python).
-  python3-gmsh openssl
+  # Test-time imports and programs (tests/cli, tests/python; nginx for test_routing.py, the
+  # gRPC balancer in front of several rdmeshd, run as the current user).
+  python3-gmsh openssl nginx
 )
 # Programs the tests need that may come from elsewhere: the machine's own Node.js build ships
 # npm and conflicts with Debian's npm package, so these are installed only when the command is

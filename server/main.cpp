@@ -56,6 +56,8 @@ int WorkerMain(int argc, char** argv) {
   app.add_option("--worker-memory", config.memory_bytes);
   app.add_option("--cache-bytes", config.cache_bytes);
   app.add_option("--max-model-bytes", config.max_model_bytes);
+  app.add_option("--cache-dir", config.store_dir);
+  app.add_option("--cache-dir-bytes", config.store_bytes);
   app.add_option("--log-format", log_format);
   app.add_option("--log-level", log_level);
   CLI11_PARSE(app, argc, argv);
@@ -138,6 +140,17 @@ int main(int argc, char** argv) {
   app.add_option("--cache-bytes", flags.service.cache_bytes,
                  "Model cache size, in model file bytes (suffixes like 1GiB work)")
       ->envname("RDMESH_CACHE_BYTES")
+      ->transform(CLI::AsSizeValue(false))
+      ->capture_default_str();
+  app.add_option("--cache-dir", flags.service.worker.store_dir,
+                 "Persistent store of parsed models, shared by the workers and by replicas on "
+                 "the same volume: a model parsed once is read from here after a restart or on "
+                 "another replica (off if unset; see docs/SCALE.md)")
+      ->envname("RDMESH_CACHE_DIR");
+  app.add_option("--cache-dir-bytes", flags.service.worker.store_bytes,
+                 "Size limit of --cache-dir; the least recently used models go first (suffixes "
+                 "like 20GiB work)")
+      ->envname("RDMESH_CACHE_DIR_BYTES")
       ->transform(CLI::AsSizeValue(false))
       ->capture_default_str();
   app.add_option("--workers", flags.service.max_workers,
@@ -268,13 +281,15 @@ int main(int argc, char** argv) {
   health->SetServingStatus(true);
   health->SetServingStatus("rdmesh.v1.Rdmesh", true);
   const std::string host = flags.listen.substr(0, flags.listen.rfind(':'));
-  LogLine(spdlog::level::info, "-",
-          fmt::format("rdmeshd {} listening on {}:{} ({}, {}) threads/job {} max-jobs {} "
-                      "max-queue {} workers {} data-root {}",
-                      RDMESH_VERSION, host, port, flags.tls_cert.empty() ? "plain" : "tls",
-                      flags.service.token.empty() ? "no token" : "token", flags.service.threads,
-                      flags.service.max_jobs, flags.service.max_queue, max_workers,
-                      flags.service.data_root.empty() ? "off" : flags.service.data_root));
+  LogLine(
+      spdlog::level::info, "-",
+      fmt::format("rdmeshd {} listening on {}:{} ({}, {}) threads/job {} max-jobs {} "
+                  "max-queue {} workers {} data-root {} cache-dir {}",
+                  RDMESH_VERSION, host, port, flags.tls_cert.empty() ? "plain" : "tls",
+                  flags.service.token.empty() ? "no token" : "token", flags.service.threads,
+                  flags.service.max_jobs, flags.service.max_queue, max_workers,
+                  flags.service.data_root.empty() ? "off" : flags.service.data_root,
+                  flags.service.worker.store_dir.empty() ? "off" : flags.service.worker.store_dir));
 
   std::mutex mutex;
   std::condition_variable stop_requested;

@@ -4,7 +4,7 @@
 #include <utility>
 
 #include "convert.h"
-#include "sha256.h"
+#include "rdmesh/sha256.h"
 
 namespace rdmesh::server {
 
@@ -18,7 +18,8 @@ ModelFormat SniffFormat(const std::string& bytes) {
   return ModelFormat::kAuto;
 }
 
-ModelCache::ModelCache(uint64_t limit_bytes) : limit_bytes_(limit_bytes) {}
+ModelCache::ModelCache(uint64_t limit_bytes, std::shared_ptr<const ModelStore> store)
+    : limit_bytes_(limit_bytes), store_(std::move(store)) {}
 
 std::shared_ptr<const CachedModel> ModelCache::Find(const std::string& id) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -58,10 +59,15 @@ Result<std::shared_ptr<const CachedModel>> ModelCache::GetOrLoad(const std::stri
   if (format == ModelFormat::kAuto) format = FormatFromName(name);
   if (format == ModelFormat::kAuto) format = SniffFormat(bytes);
   const auto start = std::chrono::steady_clock::now();
-  Result<std::shared_ptr<const Model>> model = LoadModelFromBytes(bytes, format, name);
+  StoreOutcome outcome;
+  Result<std::shared_ptr<const Model>> model =
+      store_ != nullptr ? store_->LoadOrParse(bytes, format, name, nullptr, &outcome)
+                        : LoadModelFromBytes(bytes, format, name);
   LoadResult result = model.status();
   if (model.ok()) {
     auto entry = std::make_shared<CachedModel>();
+    entry->from_store = outcome.from_store;
+    entry->store_problem = outcome.problem;
     entry->id = id;
     entry->model = *model;
     entry->info = GetModelInfo(**model);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "rdmesh/engine.h"
+#include "rdmesh/model_store.h"
 
 namespace rdmesh::server {
 
@@ -19,7 +20,9 @@ struct CachedModel {
   std::shared_ptr<const Model> model;  ///< never null
   ModelInfo info;
   uint64_t file_bytes = 0;    ///< size of the file, the entry's cost in the cache
-  double load_seconds = 0.0;  ///< time the parse took
+  double load_seconds = 0.0;  ///< time the parse (or the read from the store) took
+  bool from_store = false;    ///< read from the persistent store, not parsed
+  std::string store_problem;  ///< a discarded or unwritable store entry; "" when none
 };
 
 /// The format the bytes look like: STEP ("ISO-10303-21"), BREP ("CASCADE Topology") or IGES
@@ -33,7 +36,9 @@ ModelFormat SniffFormat(const std::string& bytes);
 class ModelCache {
  public:
   /// `limit_bytes`: total file bytes kept before the least recently used models are dropped.
-  explicit ModelCache(uint64_t limit_bytes);
+  /// `store` (optional): the persistent store that models missing here are read from before
+  /// they are parsed, and written to after.
+  explicit ModelCache(uint64_t limit_bytes, std::shared_ptr<const ModelStore> store = nullptr);
   ModelCache(const ModelCache&) = delete;
   ModelCache& operator=(const ModelCache&) = delete;
 
@@ -41,8 +46,9 @@ class ModelCache {
   /// evicted).
   std::shared_ptr<const CachedModel> Find(const std::string& id);
 
-  /// The model these bytes hold: from the cache when present (`*was_cached` = true), else parsed
-  /// (format from `format`, else from `name`'s extension, else from the content) and cached.
+  /// The model these bytes hold: from the cache when present (`*was_cached` = true), else from
+  /// the store when it has it, else parsed (format from `format`, else from `name`'s extension,
+  /// else from the content) and cached (and stored).
   /// Parse errors are the engine's (kParseError, kEmptyModel, ...).
   Result<std::shared_ptr<const CachedModel>> GetOrLoad(const std::string& bytes,
                                                        const std::string& name, ModelFormat format,
@@ -63,6 +69,7 @@ class ModelCache {
   void InsertLocked(Entry entry);
 
   const uint64_t limit_bytes_;
+  const std::shared_ptr<const ModelStore> store_;
   mutable std::mutex mutex_;
   std::condition_variable loaded_;
   std::list<Entry> lru_;  // most recently used first

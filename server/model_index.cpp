@@ -10,7 +10,7 @@
 
 #include "convert.h"
 #include "model_cache.h"
-#include "sha256.h"
+#include "rdmesh/sha256.h"
 
 namespace rdmesh::server {
 namespace {

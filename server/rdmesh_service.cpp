@@ -7,7 +7,7 @@
 
 #include "access.h"
 #include "convert.h"
-#include "sha256.h"
+#include "rdmesh/sha256.h"
 #include "status_map.h"
 
 namespace rdmesh::server {

@@ -105,7 +105,12 @@ Status OutOfMemory(uint64_t limit, const std::string& phase) {
 class Worker {
  public:
   explicit Worker(const WorkerConfig& config)
-      : config_(config), cache_(config.cache_bytes), inbox_(config.fd) {}
+      : config_(config),
+        cache_(config.cache_bytes,
+               config.store_dir.empty()
+                   ? nullptr
+                   : std::make_shared<const ModelStore>(config.store_dir, config.store_bytes)),
+        inbox_(config.fd) {}
 
   int Run() {
     wire::ToWorker call;
@@ -173,8 +178,11 @@ class Worker {
     Result<std::shared_ptr<const CachedModel>> entry = Load(file, &cached);
     if (!entry.ok()) return entry.status();
     if (!cached) {
-      log.Info("worker {}: model {} '{}' parsed in {:.3f} s", getpid(), (*entry)->id.substr(0, 12),
-               file.name(), (*entry)->load_seconds);
+      if (!(*entry)->store_problem.empty())
+        log.Warn("worker {}: {}", getpid(), (*entry)->store_problem);
+      log.Info("worker {}: model {} '{}' {} in {:.3f} s", getpid(), (*entry)->id.substr(0, 12),
+               file.name(), (*entry)->from_store ? "read from the store" : "parsed",
+               (*entry)->load_seconds);
     }
     if (Status ready = Ready(**entry, cached); !ready.ok()) return ready;
     if (call.has_load()) return Status::Ok();

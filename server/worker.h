@@ -5,6 +5,7 @@
 // the daemon one call and one process, never the service.
 
 #include <cstdint>
+#include <string>
 
 namespace rdmesh::server {
 
@@ -13,6 +14,8 @@ struct WorkerConfig {
   uint64_t cache_bytes = 0;   ///< parsed models kept, counted in model file bytes
   uint64_t memory_bytes = 0;  ///< RLIMIT_AS of this process; 0 = none
   uint64_t max_model_bytes = 256ull << 20;
+  std::string store_dir;     ///< the persistent model store shared by all workers; "" = none
+  uint64_t store_bytes = 0;  ///< its size limit; 0 = none
 };
 
 /// Serves calls from the daemon, one at a time, until the socket closes. Parsed models stay in

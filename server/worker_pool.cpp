@@ -95,19 +95,23 @@ Result<std::unique_ptr<WorkerProcess>> WorkerProcess::Start(const WorkerSettings
     child_end = fcntl(sockets[1], F_DUPFD_CLOEXEC, kWorkerFd + 1);
     close(sockets[1]);
   }
-  const std::vector<std::string> args = {settings.executable,
-                                         "--worker-fd",
-                                         std::to_string(kWorkerFd),
-                                         "--worker-memory",
-                                         std::to_string(settings.memory_bytes),
-                                         "--cache-bytes",
-                                         std::to_string(settings.cache_bytes),
-                                         "--max-model-bytes",
-                                         std::to_string(settings.max_model_bytes),
-                                         "--log-format",
-                                         settings.log_format,
-                                         "--log-level",
-                                         settings.log_level};
+  std::vector<std::string> args = {settings.executable,
+                                   "--worker-fd",
+                                   std::to_string(kWorkerFd),
+                                   "--worker-memory",
+                                   std::to_string(settings.memory_bytes),
+                                   "--cache-bytes",
+                                   std::to_string(settings.cache_bytes),
+                                   "--max-model-bytes",
+                                   std::to_string(settings.max_model_bytes),
+                                   "--log-format",
+                                   settings.log_format,
+                                   "--log-level",
+                                   settings.log_level};
+  if (!settings.store_dir.empty()) {
+    args.insert(args.end(), {"--cache-dir", settings.store_dir, "--cache-dir-bytes",
+                             std::to_string(settings.store_bytes)});
+  }
   std::vector<char*> argv;
   for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
   argv.push_back(nullptr);
@@ -401,7 +405,7 @@ CallEnd CallWorker(WorkerProcess* worker, const WorkerSettings& settings,
   };
   wire::FromWorker reply;
   while (true) {
-    const FrameRead read = ReadFrame(worker->fd(), &reply, kPollMs);
+    const FrameRead read = worker->reader().Read(&reply, kPollMs);
     if (read == FrameRead::kMessage) {
       if (reply.has_done()) {
         end.phase = reply.done().phase();

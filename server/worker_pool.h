@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "frame.h"
 #include "log.h"
 #include "rdmesh/internal/worker.pb.h"
 #include "rdmesh/status.h"
@@ -29,6 +30,8 @@ struct WorkerSettings {
   double cpu_seconds = 300.0;          ///< CPU time one call may use; 0 = no limit
   uint64_t cache_bytes = 1ull << 30;   ///< parsed models kept per worker, in model file bytes
   uint64_t max_model_bytes = 256ull << 20;
+  std::string store_dir;               ///< the persistent model store (--cache-dir); "" = none
+  uint64_t store_bytes = 10ull << 30;  ///< its size limit (--cache-dir-bytes); 0 = none
   std::string log_format = "text";
   std::string log_level = "info";
 };
@@ -45,6 +48,8 @@ class WorkerProcess {
 
   pid_t pid() const { return pid_; }
   int fd() const { return fd_; }
+  /// The buffered reader of fd(): every frame from the worker goes through it.
+  FrameReader& reader() { return reader_; }
 
   /// Whether the worker has parsed this model (as far as the daemon knows: the worker's own
   /// cache may have evicted it since, and then parses it again).
@@ -68,10 +73,11 @@ class WorkerProcess {
   bool killed() const { return killed_; }
 
  private:
-  WorkerProcess(pid_t pid, int fd) : pid_(pid), fd_(fd) {}
+  WorkerProcess(pid_t pid, int fd) : pid_(pid), fd_(fd), reader_(fd) {}
 
   pid_t pid_;
   int fd_;
+  FrameReader reader_;
   bool reaped_ = false;
   bool killed_ = false;
   int wait_status_ = 0;

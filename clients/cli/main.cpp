@@ -18,6 +18,7 @@
 #include "progress.h"
 #include "rdmesh/engine.h"
 #include "rdmesh/format_names.h"
+#include "rdmesh/model_store.h"
 #include "report.h"
 #ifdef RDMESH_WITH_REMOTE
 #include "remote_client.h"
@@ -46,6 +47,8 @@ struct CommonFlags {
   std::string model;
   bool json = false;
   bool quiet = false;
+  std::string cache_dir;                   ///< the persistent model store; "" = none
+  uint64_t cache_dir_bytes = 10ull << 30;  ///< its size limit
 };
 
 // Prints the error on stderr and, with --json, as the last stdout line; returns `code`.
@@ -79,19 +82,32 @@ bool IsStop(const Status& status) {
   return status.code() == StatusCode::kCancelled || status.code() == StatusCode::kDeadlineExceeded;
 }
 
+// Loads the model, through the store when there is a --cache-dir; fills the load fields of `run`.
 Result<std::shared_ptr<const Model>> Load(const CommonFlags& flags, Context* context,
-                                          double* seconds) {
+                                          RunInfo* run) {
   auto start = std::chrono::steady_clock::now();
-  auto model = LoadModel(flags.model, context);
-  *seconds = SecondsSince(start);
+  Result<std::shared_ptr<const Model>> model = Status(StatusCode::kInternal, "");
+  if (flags.cache_dir.empty()) {
+    model = LoadModel(flags.model, context);
+  } else {
+    StoreOutcome outcome;
+    model =
+        ModelStore(flags.cache_dir, flags.cache_dir_bytes).LoadFile(flags.model, context, &outcome);
+    run->store_used = true;
+    run->from_store = outcome.from_store;
+    run->store_problem = outcome.problem;
+    if (!outcome.problem.empty() && !flags.quiet)
+      std::cerr << "rdmesh: warning: " << outcome.problem << "\n";
+  }
+  run->load_seconds = SecondsSince(start);
   return model;
 }
 
 int RunInfoCommand(const CommonFlags& flags) {
-  double load_seconds = 0.0;
+  RunInfo run;
   Context context;
   g_interrupt_context = &context;
-  auto model = Load(flags, &context, &load_seconds);
+  auto model = Load(flags, &context, &run);
   if (!model.ok()) {
     if (IsStop(model.status()))
       return Fail(flags, kExitStopped,
@@ -101,7 +117,8 @@ int RunInfoCommand(const CommonFlags& flags) {
   ModelInfo info = GetModelInfo(**model);
   if (flags.json) {
     nlohmann::ordered_json json = ModelInfoJson(info);
-    json["load_seconds"] = load_seconds;
+    json["load_seconds"] = run.load_seconds;
+    AddStoreJson(run, &json);
     std::cout << json.dump() << std::endl;
   } else if (!flags.quiet) {
     PrintModelInfo(info, std::cout);
@@ -143,7 +160,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   RunInfo run;
   run.model_path = flags.model;
   run.output_path = output;
-  auto model = Load(flags, &context, &run.load_seconds);
+  auto model = Load(flags, &context, &run);
   if (!model.ok()) {
     if (IsStop(model.status()))
       return Fail(
@@ -236,6 +253,18 @@ void AddCommonFlags(CLI::App* command, CommonFlags* flags) {
                     "Print one JSON object on stdout as the last line (the human summary goes "
                     "to stderr)");
   command->add_flag("-q,--quiet", flags->quiet, "Print nothing but errors (and --json)");
+  command
+      ->add_option("--cache-dir", flags->cache_dir,
+                   "Keep parsed models in this directory (OCCT binary, keyed by the file's "
+                   "sha256) and read them from there instead of parsing again; off by default")
+      ->envname("RDMESH_CACHE_DIR");
+  command
+      ->add_option("--cache-dir-bytes", flags->cache_dir_bytes,
+                   "Size limit of --cache-dir; the least recently used models go first "
+                   "(suffixes like 2GiB work)")
+      ->envname("RDMESH_CACHE_DIR_BYTES")
+      ->transform(CLI::AsSizeValue(false))
+      ->capture_default_str();
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "convert.h"
+#include "rdmesh/sha256.h"
 #include "rdmesh/v1/rdmesh.grpc.pb.h"
 #include "status_map.h"
 
@@ -20,6 +21,9 @@ namespace {
 
 namespace pb = ::rdmesh::v1;
 constexpr std::size_t kChunkBytes = 1u << 20;
+// The request header naming the model of a call (its sha256): a balancer routes on it
+// (docs/ROUTING.md).
+constexpr char kModelHeader[] = "x-rdmesh-model";
 
 Result<std::string> ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -67,6 +71,12 @@ Status AddToken(grpc::ClientContext* call) {
   return Status::Ok();
 }
 
+/// The metadata of every call about the model `model_id`: the token and the routing header.
+Status PrepareCall(grpc::ClientContext* call, const std::string& model_id) {
+  call->AddMetadata(kModelHeader, model_id);
+  return AddToken(call);
+}
+
 /// Cancels `call` as soon as the context asks to stop, until destroyed.
 class StopWatcher {
  public:
@@ -100,52 +110,43 @@ Status CallFailed(const grpc::Status& status, Context* context, const std::strin
   return server::FromGrpcStatus(status);
 }
 
-}  // namespace
-
-Result<MeshResult> MeshRemote(const std::string& address, const std::string& model_path,
-                              const MeshOptions& options, Context* context) {
-  Context local;
-  if (context == nullptr) context = &local;
-  if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
-  Result<std::shared_ptr<grpc::Channel>> channel = Connect(address);
-  if (!channel.ok()) return channel.status();
-  std::unique_ptr<pb::Rdmesh::Stub> stub = pb::Rdmesh::NewStub(*channel);
-  Result<std::string> bytes = ReadFile(model_path);
-  if (!bytes.ok()) return bytes.status();
-
-  // 1. Upload (a cached model is not parsed again).
+/// Uploads `bytes` (in 1 MiB chunks; the server parses them once and caches the model).
+Status Upload(pb::Rdmesh::Stub* stub, const std::string& address, const std::string& model_path,
+              const std::string& bytes, const std::string& model_id, Context* context) {
   pb::ModelInfo uploaded;
-  {
-    grpc::ClientContext call;
-    if (Status token = AddToken(&call); !token.ok()) return token;
-    StopWatcher watcher(context, &call);
-    std::unique_ptr<grpc::ClientWriter<pb::ModelChunk>> writer =
-        stub->UploadModel(&call, &uploaded);
-    const std::string name = model_path.substr(model_path.find_last_of('/') + 1);
-    for (std::size_t offset = 0; offset == 0 || offset < bytes->size(); offset += kChunkBytes) {
-      pb::ModelChunk chunk;
-      chunk.set_data(bytes->substr(offset, kChunkBytes));
-      if (offset == 0) {
-        chunk.set_name(name);
-        chunk.set_total_bytes(bytes->size());
-      }
-      if (!writer->Write(chunk)) break;  // the server answered early; Finish says why
-    }
-    writer->WritesDone();
-    grpc::Status status = writer->Finish();
-    if (!status.ok()) return CallFailed(status, context, address);
-  }
-
-  // 2. Mesh, rebuilding the result from the stream.
-  pb::MeshRequest request;
-  request.mutable_model()->set_model_id(uploaded.model_id());
-  *request.mutable_options() = server::ToProto(options);
-  request.mutable_return_fields()->set_uv(true);
-  request.mutable_return_fields()->set_normals(true);
-  request.mutable_return_fields()->set_node_topology(true);
-  request.mutable_return_fields()->set_edges(true);  // the edge lines, as a local run has them
   grpc::ClientContext call;
-  if (Status token = AddToken(&call); !token.ok()) return token;
+  if (Status prepared = PrepareCall(&call, model_id); !prepared.ok()) return prepared;
+  StopWatcher watcher(context, &call);
+  std::unique_ptr<grpc::ClientWriter<pb::ModelChunk>> writer = stub->UploadModel(&call, &uploaded);
+  const std::string name = model_path.substr(model_path.find_last_of('/') + 1);
+  for (std::size_t offset = 0; offset == 0 || offset < bytes.size(); offset += kChunkBytes) {
+    pb::ModelChunk chunk;
+    chunk.set_data(bytes.substr(offset, kChunkBytes));
+    if (offset == 0) {
+      chunk.set_name(name);
+      chunk.set_total_bytes(bytes.size());
+    }
+    if (!writer->Write(chunk)) break;  // the server answered early; Finish says why
+  }
+  writer->WritesDone();
+  grpc::Status status = writer->Finish();
+  if (!status.ok()) return CallFailed(status, context, address);
+  if (uploaded.model_id() != model_id) {
+    return Status(StatusCode::kInternal, "rdmeshd named the model " + uploaded.model_id() +
+                                             ", not its sha256 " + model_id);
+  }
+  return Status::Ok();
+}
+
+/// One Mesh call, rebuilding the result from the stream. Sets `*not_found` when the server does
+/// not hold the model (the call then returns the server's NOT_FOUND).
+Result<MeshResult> StreamMesh(pb::Rdmesh::Stub* stub, const std::string& address,
+                              const pb::MeshRequest& request, Context* context, bool* not_found) {
+  *not_found = false;
+  grpc::ClientContext call;
+  if (Status prepared = PrepareCall(&call, request.model().model_id()); !prepared.ok()) {
+    return prepared;
+  }
   server::MeshResultBuilder builder;
   grpc::Status status;
   {
@@ -170,8 +171,44 @@ Result<MeshResult> MeshRemote(const std::string& address, const std::string& mod
       return Status(StatusCode::kInternal, "unexpected stream from rdmeshd: " + added.message());
     }
   }
-  if (!status.ok()) return CallFailed(status, context, address);
+  if (!status.ok()) {
+    *not_found = status.error_code() == grpc::StatusCode::NOT_FOUND && !builder.has_started();
+    return CallFailed(status, context, address);
+  }
   return builder.Finish();
+}
+
+}  // namespace
+
+Result<MeshResult> MeshRemote(const std::string& address, const std::string& model_path,
+                              const MeshOptions& options, Context* context) {
+  Context local;
+  if (context == nullptr) context = &local;
+  if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
+  Result<std::shared_ptr<grpc::Channel>> channel = Connect(address);
+  if (!channel.ok()) return channel.status();
+  std::unique_ptr<pb::Rdmesh::Stub> stub = pb::Rdmesh::NewStub(*channel);
+  Result<std::string> bytes = ReadFile(model_path);
+  if (!bytes.ok()) return bytes.status();
+  const std::string model_id = Sha256Hex(*bytes);
+
+  // Mesh the model by its id; upload it only when the server does not hold it (a new model, an
+  // evicted one, or one whose replica is gone), then mesh again.
+  pb::MeshRequest request;
+  request.mutable_model()->set_model_id(model_id);
+  *request.mutable_options() = server::ToProto(options);
+  request.mutable_return_fields()->set_uv(true);
+  request.mutable_return_fields()->set_normals(true);
+  request.mutable_return_fields()->set_node_topology(true);
+  request.mutable_return_fields()->set_edges(true);  // the edge lines, as a local run has them
+  bool not_found = false;
+  Result<MeshResult> result = StreamMesh(stub.get(), address, request, context, &not_found);
+  if (!not_found) return result;
+  if (Status uploaded = Upload(stub.get(), address, model_path, *bytes, model_id, context);
+      !uploaded.ok()) {
+    return uploaded;
+  }
+  return StreamMesh(stub.get(), address, request, context, &not_found);
 }
 
 }  // namespace rdmesh::cli

@@ -45,6 +45,12 @@ nlohmann::ordered_json ModelInfoJson(const ModelInfo& info) {
   };
 }
 
+void AddStoreJson(const RunInfo& run, nlohmann::ordered_json* json) {
+  if (!run.store_used) return;
+  (*json)["from_store"] = run.from_store;
+  if (!run.store_problem.empty()) (*json)["store_problem"] = run.store_problem;
+}
+
 nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& run) {
   const MeshSummary& s = result.summary;
   nlohmann::ordered_json faces = nlohmann::ordered_json::array();
@@ -60,7 +66,7 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
         {"reason", face.reason},
     });
   }
-  return {
+  nlohmann::ordered_json json = {
       {"model", run.model_path},
       {"output", run.output_path},
       {"triangles", result.mesh.triangle_count()},
@@ -78,6 +84,8 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
       {"faces_skipped", s.faces_skipped},
       {"faces", faces},
   };
+  AddStoreJson(run, &json);
+  return json;
 }
 
 void PrintModelInfo(const ModelInfo& info, std::ostream& out) {
@@ -120,8 +128,9 @@ void PrintMeshReport(const ModelInfo& info, const MeshResult& result, const RunI
     out << "area       mesh " << Format("%.6g", s.mesh_area) << ", exact "
         << Format("%.6g", s.exact_area) << " (error "
         << Format("%.3g", 100.0 * std::abs(s.mesh_area - s.exact_area) / s.exact_area) << "%)\n";
-  out << "time       load " << Format("%.2f", run.load_seconds) << " s, mesh "
-      << Format("%.2f", s.seconds) << " s, write " << Format("%.2f", run.write_seconds) << " s\n";
+  out << "time       load " << Format("%.2f", run.load_seconds)
+      << (run.from_store ? " s (from the store), mesh " : " s, mesh ") << Format("%.2f", s.seconds)
+      << " s, write " << Format("%.2f", run.write_seconds) << " s\n";
   out << "output     " << run.output_path << "\n";
   if (s.faces_failed == 0) return;
   out << "failed faces:\n";

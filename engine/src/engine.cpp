@@ -2,9 +2,6 @@
 // then assembly in face order (so the output does not depend on the thread count).
 #include "rdmesh/engine.h"
 
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <atomic>
@@ -17,6 +14,7 @@
 #include "grids.h"
 #include "heal.h"
 #include "model.h"
+#include "parallel.h"
 
 namespace rdmesh {
 
@@ -94,18 +92,16 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
     context->ReportFace(f);
     context->ReportProgress({Progress::Stage::kFaces, ++done, total});
   };
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(
-        0, static_cast<int>(todo.size()),
-        [&](int i) {
-          int f = todo[i];
-          if (context && context->ShouldStop()) return;
-          result.faces[f - 1] = MeshFace(model, f, grids, job, context, &refs[f - 1]);
-          if (wanted[f - 1]) finished(result.faces[f - 1]);
-        },
-        tbb::simple_partitioner());
-  });
+  const ParallelRunner runner(options.threads);
+  runner.For(
+      0, static_cast<int>(todo.size()),
+      [&](int i) {
+        int f = todo[i];
+        if (context && context->ShouldStop()) return;
+        result.faces[f - 1] = MeshFace(model, f, grids, job, context, &refs[f - 1]);
+        if (wanted[f - 1]) finished(result.faces[f - 1]);
+      },
+      Partition::kOnePerTask);
   if (context && context->ShouldStop()) return context->StopStatus();
   // Instanced copies reuse their representative's mesh.
   for (int f = 1; f <= nf; ++f) {

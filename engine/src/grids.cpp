@@ -1,8 +1,5 @@
 #include "grids.h"
 
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <BRep_Tool.hxx>
 #include <Geom2d_Curve.hxx>
 #include <Standard_Failure.hxx>
@@ -19,6 +16,7 @@
 #include "edge_grid.h"
 #include "model.h"
 #include "model_info.h"
+#include "parallel.h"
 #include "surface.h"
 
 namespace rdmesh {
@@ -87,35 +85,33 @@ void MergeCollapsedEdgeVertices(const Model& model, std::vector<EdgeGrid>* grids
 // infinity where that is no tighter than the deviation (which bounds the whole sagitta) or
 // where the face is narrower than the deviation.
 std::vector<double> NarrowFaceLimits(const Model& model, const GridCriteria& gc,
-                                     tbb::task_arena& arena) {
+                                     const ParallelRunner& runner) {
   const int nf = model.face_count(), ne = model.edge_count();
   std::vector<double> limit(nf, INFINITY);
   if (!(gc.max_deviation > 0) || !(gc.narrow_face_fraction > 0)) return limit;
   const double width = gc.max_deviation / gc.narrow_face_fraction;  // area / perimeter below it
   std::vector<double> length(ne, 0.0);
-  arena.execute([&] {
-    tbb::parallel_for(1, ne + 1, [&](int e) {
-      const TopoDS_Edge& edge = model.edge(e);
-      if (BRep_Tool::Degenerated(edge)) return;
-      try {
-        double t0, t1;
-        BRep_Tool::Range(edge, t0, t1);
-        length[e - 1] = PolylineLength(*MakeEdgeCurve(edge), t0, t1, kWidthSamples);
-      } catch (const Standard_Failure&) {
-        length[e - 1] = 0;
-      }
-    });
-    tbb::parallel_for(1, nf + 1, [&](int f) {
-      const TopoDS_Face& face = model.face(f);
-      double area = model.face_area[f - 1], perimeter = 0;
-      for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
-        const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
-        if (!BRep_Tool::IsClosed(edge, face)) perimeter += length[model.edges.FindIndex(edge) - 1];
-      }
-      // Narrower than the deviation, a face is not resolved at all: it may stand as a line.
-      if (perimeter > 0 && area / perimeter < width && area / perimeter >= gc.max_deviation)
-        limit[f - 1] = gc.narrow_face_fraction * area / perimeter;
-    });
+  runner.For(1, ne + 1, [&](int e) {
+    const TopoDS_Edge& edge = model.edge(e);
+    if (BRep_Tool::Degenerated(edge)) return;
+    try {
+      double t0, t1;
+      BRep_Tool::Range(edge, t0, t1);
+      length[e - 1] = PolylineLength(*MakeEdgeCurve(edge), t0, t1, kWidthSamples);
+    } catch (const Standard_Failure&) {
+      length[e - 1] = 0;
+    }
+  });
+  runner.For(1, nf + 1, [&](int f) {
+    const TopoDS_Face& face = model.face(f);
+    double area = model.face_area[f - 1], perimeter = 0;
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+      if (!BRep_Tool::IsClosed(edge, face)) perimeter += length[model.edges.FindIndex(edge) - 1];
+    }
+    // Narrower than the deviation, a face is not resolved at all: it may stand as a line.
+    if (perimeter > 0 && area / perimeter < width && area / perimeter >= gc.max_deviation)
+      limit[f - 1] = gc.narrow_face_fraction * area / perimeter;
   });
   return limit;
 }
@@ -171,8 +167,8 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
   for (int e = 1; e <= ne; ++e)
     factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
 
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  const std::vector<double> narrow = NarrowFaceLimits(model, gc, arena);
+  const ParallelRunner runner(threads);
+  const std::vector<double> narrow = NarrowFaceLimits(model, gc, runner);
 
   auto build = [&](int e, bool params) {
     if (!edge_needed.empty() && !edge_needed[e - 1] && !params) return;
@@ -219,15 +215,13 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
   };
   std::vector<int> sources, copies;
   for (int e = 1; e <= ne; ++e) (source[e - 1] == e ? sources : copies).push_back(e);
-  arena.execute([&] {
-    tbb::parallel_for(0, static_cast<int>(sources.size()), [&](int i) {
-      if (context && context->ShouldStop()) return;
-      build(sources[i], true);
-    });
-    tbb::parallel_for(0, static_cast<int>(copies.size()), [&](int i) {
-      if (context && context->ShouldStop()) return;
-      build(copies[i], false);
-    });
+  runner.For(0, static_cast<int>(sources.size()), [&](int i) {
+    if (context && context->ShouldStop()) return;
+    build(sources[i], true);
+  });
+  runner.For(0, static_cast<int>(copies.size()), [&](int i) {
+    if (context && context->ShouldStop()) return;
+    build(copies[i], false);
   });
   if (context && context->ShouldStop()) return context->StopStatus();
   MergeCollapsedEdgeVertices(model, grids);

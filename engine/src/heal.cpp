@@ -1,8 +1,5 @@
 #include "heal.h"
 
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <BRep_Tool.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp_Explorer.hxx>
@@ -12,6 +9,7 @@
 #include <unordered_map>
 
 #include "model.h"
+#include "parallel.h"
 #include "surface.h"
 
 namespace rdmesh {
@@ -63,15 +61,13 @@ Status HealEdgeGrids(const Model& model, const std::vector<int>& faces, bool nur
       face_tshapes[i].push_back(ex.Current().TShape().get());
   std::vector<int> todo(faces.size());  // indices into `faces`
   for (size_t i = 0; i < faces.size(); ++i) todo[i] = static_cast<int>(i);
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  const ParallelRunner runner(threads);
   for (int round = 0; round < kMaxRounds && !todo.empty(); ++round) {
     if (context && context->ShouldStop()) return context->StopStatus();
     std::vector<std::vector<std::pair<int, int>>> found(todo.size());
-    arena.execute([&] {
-      tbb::parallel_for(0, static_cast<int>(todo.size()), [&](int i) {
-        if (context && context->ShouldStop()) return;
-        found[i] = SplitsForFace(model, faces[todo[i]], *grids, nurbs, context);
-      });
+    runner.For(0, static_cast<int>(todo.size()), [&](int i) {
+      if (context && context->ShouldStop()) return;
+      found[i] = SplitsForFace(model, faces[todo[i]], *grids, nurbs, context);
     });
     if (context && context->ShouldStop()) return context->StopStatus();
     ++stats->rounds;

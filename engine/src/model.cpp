@@ -12,13 +12,14 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <vector>
 
 #include "model_info.h"
+#include "model_payload.h"
 #include "model_readers.h"
+#include "parallel.h"
 
 namespace rdmesh {
-
-namespace {
 
 const char* FormatName(ModelFormat format) {
   switch (format) {
@@ -33,6 +34,8 @@ const char* FormatName(ModelFormat format) {
   }
   return "unknown";
 }
+
+namespace {
 
 // Face instancing: faces that share a TShape are meshed once, through the first of them.
 void FindInstances(Model* model) {
@@ -60,16 +63,22 @@ void FindInstances(Model* model) {
   }
 }
 
+// A face placed like an earlier one (its representative) takes that face's area, scaled.
+bool CopiesAnEarlierFace(const Model& model, int id) {
+  const int rep = model.face_representative[id - 1];
+  return rep != id && rep < id;
+}
+
+// The exact areas, on all cores: each face on its own, then the copies in face order.
 void ComputeFaceAreas(Model* model) {
   int count = model->face_count();
   model->face_area.assign(count, 0.0);
+  std::vector<int> computed;
   for (int id = 1; id <= count; ++id) {
-    int rep = model->face_representative[id - 1];
-    double scale = model->face_placement[id - 1].ScaleFactor();
-    if (rep != id && rep < id) {
-      model->face_area[id - 1] = model->face_area[rep - 1] * scale * scale;
-      continue;
-    }
+    if (!CopiesAnEarlierFace(*model, id)) computed.push_back(id);
+  }
+  ParallelRunner(0).For(0, static_cast<int>(computed.size()), [&](int i) {
+    const int id = computed[i];
     try {
       GProp_GProps props;
       BRepGProp::SurfaceProperties(model->face(id), props);
@@ -77,13 +86,29 @@ void ComputeFaceAreas(Model* model) {
     } catch (const Standard_Failure&) {
       model->face_area[id - 1] = 0.0;  // a broken face: meshing will report it
     }
+  });
+  for (int id = 1; id <= count; ++id) {
+    if (!CopiesAnEarlierFace(*model, id)) continue;
+    const double scale = model->face_placement[id - 1].ScaleFactor();
+    model->face_area[id - 1] =
+        model->face_area[model->face_representative[id - 1] - 1] * scale * scale;
   }
 }
 
-// `name` appears in messages, `display_name` in ModelInfo.
+}  // namespace
+
+DerivedValues DerivedValuesOf(const Model& model) {
+  DerivedValues derived;
+  derived.face_area = model.face_area;
+  derived.bbox = model.info.bbox;
+  derived.diagonal = model.info.diagonal;
+  return derived;
+}
+
 Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
                                                 const std::string& name,
-                                                const std::string& display_name) {
+                                                const std::string& display_name,
+                                                const DerivedValues* derived) {
   auto model = std::make_shared<Model>();
   model->shape = read.shape;
   model->doc = read.doc;
@@ -94,11 +119,25 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
     if (model->faces.IsEmpty())
       return Status(StatusCode::kEmptyModel, "'" + name + "' holds no faces");
     FindInstances(model.get());
-    ComputeFaceAreas(model.get());
+    if (derived != nullptr &&
+        derived->face_area.size() != static_cast<std::size_t>(model->face_count())) {
+      return Status(StatusCode::kParseError,
+                    "cannot read '" + name + "': " + std::to_string(derived->face_area.size()) +
+                        " face areas for " + std::to_string(model->face_count()) + " faces");
+    }
+    if (derived != nullptr) {
+      model->face_area = derived->face_area;
+    } else {
+      ComputeFaceAreas(model.get());
+    }
     for (int id = 1; id <= model->edge_count(); ++id)
       model->max_edge_tolerance =
           std::max(model->max_edge_tolerance, BRep_Tool::Tolerance(model->edge(id)));
-    model->info = ComputeModelInfo(*model);
+    model->info = ComputeModelInfo(*model, /*bounding_box=*/derived == nullptr);
+    if (derived != nullptr) {
+      model->info.bbox = derived->bbox;
+      model->info.diagonal = derived->diagonal;
+    }
   } catch (const Standard_Failure& failure) {
     return Status(StatusCode::kParseError, "cannot read '" + name + "': invalid topology (" +
                                                failure.DynamicType()->Name() + ")");
@@ -110,9 +149,9 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
   return std::shared_ptr<const Model>(std::move(model));
 }
 
-Result<std::shared_ptr<const Model>> Load(const std::string& bytes, ModelFormat format,
-                                          const std::string& path, const std::string& name,
-                                          const std::string& display_name, Context* context) {
+Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat format,
+                                      const std::string& path, const std::string& name,
+                                      const std::string& display_name, Context* context) {
   if (context != nullptr) {
     if (context->ShouldStop()) return context->StopStatus();
     context->ReportProgress(Progress{Progress::Stage::kLoading, 0, 1});
@@ -126,20 +165,36 @@ Result<std::shared_ptr<const Model>> Load(const std::string& bytes, ModelFormat 
   }
   Result<ReadShape> read = ReadModelBytes(bytes, format, path, name, context);
   if (!read.ok()) return read.status();
+  CanonicalModel canonical;
+  const PayloadKind kind = PayloadKindOf(*read);
+  canonical.kind = kind;
+  Result<std::string> payload = WritePayload(*read);
+  if (!payload.ok()) {
+    return Status(payload.status().code(),
+                  "cannot read '" + name + "': " + payload.status().message());
+  }
+  if (context != nullptr && context->ShouldStop()) return context->StopStatus();
+  Result<ReadShape> reread = ReadPayload(*payload, kind);
+  if (!reread.ok()) {
+    return Status(StatusCode::kInternal,
+                  "cannot read '" + name + "': its own payload: " + reread.status().message());
+  }
+  reread->length_unit = read->length_unit;
+  reread->unit_scale_mm = read->unit_scale_mm;
+  canonical.payload = std::move(*payload);
   Result<std::shared_ptr<const Model>> model =
-      BuildModel(std::move(*read), format, name, display_name);
-  if (context != nullptr && model.ok())
-    context->ReportProgress(Progress{Progress::Stage::kLoading, 1, 1});
-  return model;
+      BuildModel(std::move(*reread), format, name, display_name);
+  if (!model.ok()) return model.status();
+  canonical.model = std::move(*model);
+  if (context != nullptr) context->ReportProgress(Progress{Progress::Stage::kLoading, 1, 1});
+  return canonical;
 }
-
-}  // namespace
 
 const TopoDS_Face& Model::face(int id) const { return TopoDS::Face(faces(id)); }
 
 const TopoDS_Edge& Model::edge(int id) const { return TopoDS::Edge(edges(id)); }
 
-Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context* context) {
+Result<std::string> ReadModelFile(const std::string& path) {
   std::error_code error;
   std::filesystem::file_status status = std::filesystem::status(path, error);
   if (!std::filesystem::exists(status))
@@ -150,15 +205,26 @@ Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context*
   if (!file) return Status(StatusCode::kIoError, "cannot open '" + path + "' for reading");
   std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   if (file.bad()) return Status(StatusCode::kIoError, "cannot read '" + path + "': read error");
+  return bytes;
+}
+
+Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context* context) {
+  Result<std::string> bytes = ReadModelFile(path);
+  if (!bytes.ok()) return bytes.status();
   std::string name = std::filesystem::path(path).filename().string();
-  return Load(bytes, FormatFromExtension(path), path, path, name, context);
+  Result<CanonicalModel> parsed =
+      ParseCanonical(*bytes, FormatFromExtension(path), path, path, name, context);
+  if (!parsed.ok()) return parsed.status();
+  return parsed->model;
 }
 
 Result<std::shared_ptr<const Model>> LoadModelFromBytes(const std::string& bytes,
                                                         ModelFormat format, const std::string& name,
                                                         Context* context) {
   if (format == ModelFormat::kAuto) format = FormatFromExtension(name);
-  return Load(bytes, format, "", name, name, context);
+  Result<CanonicalModel> parsed = ParseCanonical(bytes, format, "", name, name, context);
+  if (!parsed.ok()) return parsed.status();
+  return parsed->model;
 }
 
 ModelInfo GetModelInfo(const Model& model) { return model.info; }

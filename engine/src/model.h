@@ -7,10 +7,12 @@
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
+#include <array>
 #include <gp_Trsf.hxx>
 #include <string>
 #include <vector>
 
+#include "model_payload.h"
 #include "rdmesh/engine.h"
 
 namespace rdmesh {
@@ -53,5 +55,51 @@ class Model {
   const TopoDS_Face& face(int id) const;  ///< id 1..F
   const TopoDS_Edge& edge(int id) const;  ///< id 1..E
 };
+
+/// A model parsed from its file, and its canonical payload: the model is what the payload reads
+/// back as (see ParseCanonical).
+struct CanonicalModel {
+  std::shared_ptr<const Model> model;
+  std::string payload;  ///< OCCT binary bytes (model_payload.h), of `kind`
+  PayloadKind kind = PayloadKind::kBinXcaf;
+};
+
+/// "step", "iges", "brep" ("unknown" for kAuto): ModelInfo::format.
+const char* FormatName(ModelFormat format);
+
+/// The whole file at `path`, with LoadModel's errors (kNotFound, kIoError).
+Result<std::string> ReadModelFile(const std::string& path);
+
+/// Reads the bytes of a model file (`format` kAuto: from the content), writes what the reader
+/// produced as a payload (BinXCAF, or BinTools for BREP), reads that back and builds the Model
+/// of THAT: OCCT's binary formats do not restore every bit the readers produced (BinTools
+/// rebuilds a plane's axes, re-orthogonalising its X direction), so a model parsed here and one
+/// read later from its stored payload (model_store.h) are the same bits and mesh identically.
+/// `path` is the file on disk ("" when none), `name` appears in messages, `display_name` in
+/// ModelInfo. The reader's errors, or the context's stop status.
+Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat format,
+                                      const std::string& path, const std::string& name,
+                                      const std::string& display_name, Context* context);
+
+/// What BuildModel computes slowly (exact face areas, the tight bounding box): a stored model
+/// brings them along, so that reading it is not dominated by recomputing them. Exactly the values
+/// BuildModel computed for the same payload, so a model built with them is the same.
+struct DerivedValues {
+  std::vector<double> face_area;  ///< Model::face_area
+  std::array<double, 6> bbox{};   ///< ModelInfo::bbox
+  double diagonal = 0.0;          ///< ModelInfo::diagonal
+};
+
+/// The DerivedValues of a built model.
+DerivedValues DerivedValuesOf(const Model& model);
+
+/// The Model of what a reader produced: ids, instancing, face areas, model info. `name` appears
+/// in messages, `display_name` in ModelInfo. With `derived`, face areas and the bounding box are
+/// taken from it (kParseError when it does not fit the shape) instead of computed. kEmptyModel,
+/// or kParseError for invalid topology.
+Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
+                                                const std::string& name,
+                                                const std::string& display_name,
+                                                const DerivedValues* derived = nullptr);
 
 }  // namespace rdmesh

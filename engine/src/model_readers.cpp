@@ -227,21 +227,6 @@ Handle(TDocStd_Document) NewXcafDocument() {
   return doc;
 }
 
-// The document's free shapes (with their locations) as one compound.
-TopoDS_Shape FreeShapesCompound(const Handle(TDocStd_Document) & doc) {
-  Handle(XCAFDoc_ShapeTool) shape_tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
-  TDF_LabelSequence labels;
-  shape_tool->GetFreeShapes(labels);
-  BRep_Builder builder;
-  TopoDS_Compound compound;
-  builder.MakeCompound(compound);
-  for (const TDF_Label& label : labels) {
-    TopoDS_Shape shape = XCAFDoc_ShapeTool::GetShape(label);
-    if (!shape.IsNull()) builder.Add(compound, shape);
-  }
-  return compound;
-}
-
 struct LengthUnit {
   const char* name;
   double mm;
@@ -452,6 +437,20 @@ Result<ReadShape> ReadBrep(const std::string& bytes, const std::string& name,
 }
 
 }  // namespace
+
+TopoDS_Shape FreeShapesCompound(const Handle(TDocStd_Document) & doc) {
+  Handle(XCAFDoc_ShapeTool) shape_tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+  TDF_LabelSequence labels;
+  shape_tool->GetFreeShapes(labels);
+  BRep_Builder builder;
+  TopoDS_Compound compound;
+  builder.MakeCompound(compound);
+  for (const TDF_Label& label : labels) {
+    TopoDS_Shape shape = XCAFDoc_ShapeTool::GetShape(label);
+    if (!shape.IsNull()) builder.Add(compound, shape);
+  }
+  return compound;
+}
 
 ModelFormat FormatFromExtension(const std::string& path) {
   std::string ext = Lower(std::filesystem::path(path).extension().string());

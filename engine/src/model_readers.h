@@ -26,6 +26,9 @@ struct ReadShape {
   double unit_scale_mm = 1.0;
 };
 
+/// The document's free shapes (with their locations) as one compound: the model's shape.
+TopoDS_Shape FreeShapesCompound(const Handle(TDocStd_Document) & doc);
+
 /// Reads `bytes` (the whole file) as `format` (not kAuto). `path` is the file on disk when there
 /// is one (IGES is read from a file; a temporary one is written when `path` is empty). `name`
 /// is used in messages. Checks the header and trailer first, so truncated files fail cleanly.

@@ -121,7 +121,11 @@ std::string Scan(std::string_view text, bool strings) {
       size_t digits_end = Skip(text, i + 1, IsDigit);
       size_t equals = Skip(text, digits_end, IsSpace);
       if (digits_end == i + 1 || equals >= text.size() || text[equals] != '=') continue;
-      defined.insert(EntityId(text.substr(i + 1, digits_end - i - 1)));
+      const long id = EntityId(text.substr(i + 1, digits_end - i - 1));
+      // Read as code, a comment could name an entity: duplicates count in the first pass only.
+      if (!defined.insert(id).second && strings) {
+        return "entity #" + std::to_string(id) + " is defined more than once";
+      }
       size_t keyword = Skip(text, equals + 1, IsSpace);
       size_t keyword_end = Skip(text, keyword, IsKeyword);
       std::string_view name = text.substr(keyword, keyword_end - keyword);

@@ -21,6 +21,9 @@ constexpr int kMaxStepNesting = 1000;
 ///   leaves such an unresolved reference as a record number (StepData_StepReaderData::
 ///   SetEntityNumbers), which can land on an ORIENTED_EDGE and make the same endless recursion.
 ///   Such a file could not transfer cleanly anyway: its edge is missing;
+/// - an entity id defined twice (outside strings and comments): OCCT then resolves references
+///   by the nearest record of that id, which our cycle check cannot follow, and its
+///   SetEntityNumbers reads uninitialised memory on such files (valgrind). Part 21 forbids it;
 /// - a CARTESIAN_POINT coordinate beyond the range of a double (1.E+999): OCCT takes it as
 ///   infinity, and ShapeFix_Edge::FixAddPCurve then dereferences a null curve in
 ///   GeomProjLib::ProjectOnPlane or searches for ever in Extrema_GenExtPS (tests/data/fuzz).

@@ -76,6 +76,17 @@ TEST(StepPrecheckTest, RefusesOrientedEdgeOfUndefinedEdge) {
   EXPECT_EQ(StepCrashReason(moved), "");
 }
 
+// Ids defined twice: OCCT resolves a reference to the nearest record of that id, so a cycle can
+// hide behind a later definition (found by scripts/fuzz_smoke.sh as a CrossOver of two seeds).
+TEST(StepPrecheckTest, RefusesDuplicateIds) {
+  const std::string oe29 = "#29=ORIENTED_EDGE('',*,*,#50,.T.);";
+  std::string hidden = SlicedCylinder(
+      oe29, "#29=ORIENTED_EDGE('',*,*,#30,.T.);\n#30=ORIENTED_EDGE('',*,*,#29,.F.);\n" + oe29);
+  EXPECT_EQ(StepCrashReason(hidden), "entity #29 is defined more than once");
+  // The same text in a string or a comment is no definition.
+  EXPECT_EQ(StepCrashReason(SlicedCylinder(oe29, oe29 + "/* #29=ORIENTED_EDGE */")), "");
+}
+
 TEST(StepPrecheckTest, RefusesAbsurdNesting) {
   const std::string loop = "#24=EDGE_LOOP('',(#29,#30,#31,#32));";
   auto nested = [&loop](int depth, const std::string& inner) {

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "sha256.h"
+#include "rdmesh/sha256.h"
 
 namespace rdmesh::server {
 namespace {

@@ -1,14 +1,16 @@
 #include "model_cache.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "sha256.h"
+#include "rdmesh/sha256.h"
 
 namespace rdmesh::server {
 namespace {
@@ -109,6 +111,28 @@ TEST(ModelCacheTest, KeepsTheNewestEntryEvenWhenItAlonePassesTheLimit) {
   ASSERT_TRUE(cache.GetOrLoad(a, "a.step", ModelFormat::kAuto, &cached).ok());
   EXPECT_NE(cache.Find(Sha256Hex(a)), nullptr);
   EXPECT_EQ(cache.size(), 1);
+}
+
+// Two workers (two caches) sharing one store: the second reads what the first parsed.
+TEST(ModelCacheTest, WorkersShareTheStore) {
+  const std::string bytes = ReadData("pyocc_eight_cyl.stp");
+  const std::string dir = ::testing::TempDir() + "/model_cache_store_" + std::to_string(getpid());
+  std::filesystem::remove_all(dir);
+  auto store = std::make_shared<const ModelStore>(dir, 0);
+  ModelCache parsing(1 << 30, store), reading(1 << 30, store);
+  bool cached = true;
+  auto parsed = parsing.GetOrLoad(bytes, "eight.stp", ModelFormat::kAuto, &cached);
+  ASSERT_TRUE(parsed.ok()) << parsed.status().ToString();
+  EXPECT_FALSE((*parsed)->from_store);
+  EXPECT_TRUE((*parsed)->store_problem.empty()) << (*parsed)->store_problem;
+  auto read = reading.GetOrLoad(bytes, "eight.stp", ModelFormat::kAuto, &cached);
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  EXPECT_FALSE(cached);  // not in this worker's memory
+  EXPECT_TRUE((*read)->from_store);
+  EXPECT_EQ((*read)->id, (*parsed)->id);
+  EXPECT_EQ((*read)->info.faces, (*parsed)->info.faces);
+  EXPECT_EQ((*read)->info.bbox, (*parsed)->info.bbox);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -9,7 +9,7 @@
 #include <thread>
 #include <vector>
 
-#include "sha256.h"
+#include "rdmesh/sha256.h"
 
 namespace rdmesh::server {
 namespace {

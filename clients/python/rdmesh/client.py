@@ -1,5 +1,6 @@
 """The rdmesh client: upload, describe and mesh models on an rdmeshd server."""
 
+import hashlib
 import os
 import re
 from dataclasses import dataclass
@@ -14,6 +15,9 @@ from rdmesh.v1 import rdmesh_pb2 as pb
 from rdmesh.v1 import rdmesh_pb2_grpc as pb_grpc
 
 CHUNK_BYTES = 1 << 20
+# Request header naming the model a call is about (its sha256, the server's model id), sent on
+# every call for a model so that an L7 balancer can route by model (docs/ROUTING.md).
+MODEL_HEADER = "x-rdmesh-model"
 _MODEL_ID = re.compile(r"^[0-9a-f]{64}$")
 _OPTION_NAMES = {"max_deviation", "max_deviation_rel", "rd_tolerance", "max_triangles",
                  "min_edge_length", "max_edge_length", "nurbs", "threads", "face_ids",
@@ -182,12 +186,32 @@ class _FaceParts:
             area=f.area, exact_area=f.exact_area, seconds=f.seconds, messages=self.count)
 
 
+@dataclass
+class _Model:
+    """A model a call is about: the ModelRef to send, its routing key (the sha256 of its bytes,
+    None for a server-side path) and, when this client can upload it, the local file or bytes."""
+    ref: "pb.ModelRef"
+    key: Optional[str]
+    path: Optional[str] = None
+    data: Optional[bytes] = None
+
+
+def model_key(data) -> str:
+    """The model id of a model file's bytes: its sha256, 64 lower-case hex digits."""
+    return hashlib.sha256(data).hexdigest()
+
+
 class Client:
-    """A connection to rdmeshd.
+    """A connection to rdmeshd, or to a balancer in front of several (docs/ROUTING.md).
 
     address: "host:port". token: the server's bearer token (--token-file), if it has one.
     root_certificates: PEM bytes of the CA that signed the server's --tls-cert; TLS is used when
     given. request_id: sent as x-request-id so that the server's log lines carry it.
+
+    Every call for a model carries an `x-rdmesh-model: <sha256>` header. mesh() and info() of a
+    local file ask for the model by its id first and upload it only when the server answers
+    NOT_FOUND (a new model, an evicted one, or one that lived on a replica that is gone); a model
+    id this client uploaded from a file is uploaded again from that file in the same case.
     """
 
     def __init__(self, address, token=None, root_certificates=None, request_id=None):
@@ -200,6 +224,7 @@ class Client:
             self._channel = grpc.insecure_channel(address, options=options)
         self._stub = pb_grpc.RdmeshStub(self._channel)
         self._metadata = []
+        self._uploaded_paths: Dict[str, str] = {}  # model id -> file it was uploaded from
         if token:
             self._metadata.append(("authorization", "Bearer " + token))
         if request_id:
@@ -235,33 +260,30 @@ class Client:
     def upload(self, path_or_bytes, name=None, timeout=None, chunk_bytes=CHUNK_BYTES):
         """Uploads a model file (a path, or the bytes themselves) in ~1 MiB chunks and returns
         its ModelInfo; ModelInfo.model_id names it in later calls."""
+        path = None
         if isinstance(path_or_bytes, (bytes, bytearray, memoryview)):
             data = bytes(path_or_bytes)
             name = name or "upload"
         else:
-            with open(path_or_bytes, "rb") as file:
+            path = os.fspath(path_or_bytes)
+            with open(path, "rb") as file:
                 data = file.read()
-            name = name or os.path.basename(os.fspath(path_or_bytes))
-
-        def chunks():
-            yield pb.ModelChunk(data=data[:chunk_bytes], name=name, total_bytes=len(data))
-            for start in range(chunk_bytes, len(data), chunk_bytes):
-                yield pb.ModelChunk(data=data[start:start + chunk_bytes])
-
-        return self._call(self._stub.UploadModel, chunks(), timeout)
+            name = name or os.path.basename(path)
+        return self._upload(data, name, model_key(data), path, timeout, chunk_bytes)
 
     def info(self, model, timeout=None):
-        """ModelInfo of a model: a ModelInfo, a model id, a local file (uploaded first) or a
-        ModelRef."""
-        return self._call(self._stub.GetModelInfo, self._ref(model, timeout), timeout)
+        """ModelInfo of a model: a ModelInfo, a model id, a local file (uploaded when the server
+        does not hold it) or a ModelRef."""
+        return self._with_model(
+            model, lambda m: self._call(self._stub.GetModelInfo, m.ref, timeout, m.key), timeout)
 
     def mesh_stream(self, model, uv=False, normals=False, timeout=None, edges=False, **options):
-        """The raw Mesh call: an iterator of MeshEvent messages that also has cancel()."""
-        request = pb.MeshRequest(model=self._ref(model, timeout),
-                                 options=mesh_options(**options),
-                                 return_fields=pb.ReturnFields(uv=uv, normals=normals,
-                                                               edges=edges))
-        return self._stub.Mesh(request, timeout=timeout, metadata=self._metadata)
+        """The raw Mesh call: an iterator of MeshEvent messages that also has cancel(). A local
+        file is uploaded first (a stream cannot be retried after NOT_FOUND)."""
+        m = self._model(model)
+        if m.data is not None:
+            self._upload_model(m, timeout)
+        return self._mesh_call(m, uv, normals, timeout, options, edges)
 
     def mesh(self, model, progress: Optional[Callable[[Progress], None]] = None, uv=False,
              normals=False, timeout=None, edges=False, **options) -> MeshResult:
@@ -272,8 +294,15 @@ class Client:
         `progress` is called with a Progress as the run advances. `timeout` is the call's
         deadline in seconds. With `edges`, MeshResult.edges holds every B-rep edge as a
         polyline over the assembled mesh's nodes (Edges)."""
-        call = self.mesh_stream(model, uv=uv, normals=normals, timeout=timeout, edges=edges,
-                                **options)
+        mesh_options(**options)  # unknown options fail before any call
+        return self._with_model(
+            model, lambda m: self._collect(self._mesh_call(m, uv, normals, timeout, options, edges),
+                                           progress, edges), timeout)
+
+    # -- helpers ---------------------------------------------------------------------------
+
+    def _collect(self, call, progress, edges=False):
+        """Reads a Mesh stream into a MeshResult."""
         edge_parts = _EdgeParts()
         started = summary = None
         parts: Dict[int, _FaceParts] = {}
@@ -330,24 +359,80 @@ class Client:
                           largest_message=largest,
                           edges=edge_parts.result() if edges else None)
 
-    # -- helpers ---------------------------------------------------------------------------
+    def _metadata_for(self, key):
+        return self._metadata + [(MODEL_HEADER, key)] if key else self._metadata
 
-    def _call(self, method, request, timeout):
+    def _call(self, method, request, timeout, key=None):
         try:
-            return method(request, timeout=timeout, metadata=self._metadata)
+            return method(request, timeout=timeout, metadata=self._metadata_for(key))
         except grpc.RpcError as error:
             raise RdmeshError.wrap(error) from None
 
-    def _ref(self, model, timeout=None):
-        """A ModelRef for `model`, uploading local files first."""
-        if isinstance(model, pb.ModelRef):
-            return model
+    def _mesh_call(self, m, uv, normals, timeout, options, edges=False):
+        request = pb.MeshRequest(model=m.ref, options=mesh_options(**options),
+                                 return_fields=pb.ReturnFields(uv=uv, normals=normals,
+                                                               edges=edges))
+        return self._stub.Mesh(request, timeout=timeout, metadata=self._metadata_for(m.key))
+
+    def _upload(self, data, name, key, path, timeout, chunk_bytes=CHUNK_BYTES):
+        def chunks():
+            yield pb.ModelChunk(data=data[:chunk_bytes], name=name, total_bytes=len(data))
+            for start in range(chunk_bytes, len(data), chunk_bytes):
+                yield pb.ModelChunk(data=data[start:start + chunk_bytes])
+
+        info = self._call(self._stub.UploadModel, chunks(), timeout, key)
+        if path is not None and info.model_id == key:
+            self._uploaded_paths[key] = path
+        return info
+
+    def _upload_model(self, m, timeout):
+        """Uploads a model this client has the bytes of (or the file it was uploaded from)."""
+        data = m.data
+        if data is None:
+            with open(m.path, "rb") as file:
+                data = file.read()
+            if model_key(data) != m.key:
+                raise RdmeshError(grpc.StatusCode.NOT_FOUND,
+                                  "model %s is not on the server, and '%s' it was uploaded from "
+                                  "has changed since" % (m.key, m.path))
+        name = os.path.basename(m.path) if m.path is not None else "upload"
+        return self._upload(data, name, m.key, m.path, timeout)
+
+    def _with_model(self, model, call, timeout):
+        """call(_Model) for `model`; when the server does not hold a model this client can
+        upload (NOT_FOUND), uploads it and calls once more."""
+        m = self._model(model)
+        try:
+            return call(m)
+        except RdmeshError as error:
+            if error.code != grpc.StatusCode.NOT_FOUND or (m.path is None and m.data is None):
+                raise
+        self._upload_model(m, timeout)
+        return call(m)
+
+    def _model(self, model) -> _Model:
+        """What `model` is, without any call: a ModelRef, a ModelInfo, a model id, a local file or
+        the bytes of one."""
         if isinstance(model, pb.ModelInfo):
-            return pb.ModelRef(model_id=model.model_id)
+            model = model.model_id
+        if isinstance(model, pb.ModelRef):
+            kind = model.WhichOneof("source")
+            if kind == "model_id":
+                return _Model(model, model.model_id, self._uploaded_paths.get(model.model_id))
+            if kind == "inline_model":
+                return _Model(model, model_key(model.inline_model.data))
+            return _Model(model, None)  # a server-side path: its bytes are not known here
         if isinstance(model, str) and _MODEL_ID.match(model) and not os.path.exists(model):
-            return pb.ModelRef(model_id=model)
-        if isinstance(model, (str, os.PathLike, bytes, bytearray)):
-            return pb.ModelRef(model_id=self.upload(model, timeout=timeout).model_id)
+            return _Model(pb.ModelRef(model_id=model), model, self._uploaded_paths.get(model))
+        if isinstance(model, (bytes, bytearray)):
+            data = bytes(model)
+            return _Model(pb.ModelRef(model_id=model_key(data)), model_key(data), data=data)
+        if isinstance(model, (str, os.PathLike)):
+            path = os.fspath(model)
+            with open(path, "rb") as file:
+                data = file.read()
+            key = model_key(data)
+            return _Model(pb.ModelRef(model_id=key), key, path=path, data=data)
         raise TypeError("model must be a path, bytes, a model id, a ModelInfo or a ModelRef")
 
 

@@ -1,10 +1,10 @@
-#include "sha256.h"
+#include "rdmesh/sha256.h"
 
 #include <openssl/evp.h>
 
 #include <stdexcept>
 
-namespace rdmesh::server {
+namespace rdmesh {
 
 std::string Sha256Hex(std::string_view bytes) {
   unsigned char digest[EVP_MAX_MD_SIZE];
@@ -29,4 +29,4 @@ bool IsSha256Hex(std::string_view id) {
   return true;
 }
 
-}  // namespace rdmesh::server
+}  // namespace rdmesh

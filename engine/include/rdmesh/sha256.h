@@ -1,9 +1,10 @@
 #pragma once
+// Content hashes: the ids of models in the service and the keys of the persistent model store.
 
 #include <string>
 #include <string_view>
 
-namespace rdmesh::server {
+namespace rdmesh {
 
 /// SHA-256 of `bytes` as 64 lower-case hex digits (OpenSSL's EVP digest). Thread-safe.
 std::string Sha256Hex(std::string_view bytes);
@@ -11,4 +12,4 @@ std::string Sha256Hex(std::string_view bytes);
 /// True for a string of exactly 64 lower-case hex digits.
 bool IsSha256Hex(std::string_view id);
 
-}  // namespace rdmesh::server
+}  // namespace rdmesh
