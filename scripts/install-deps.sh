@@ -8,7 +8,8 @@
 #
 # The default set holds everything that scripts/test.sh builds, imports or runs: the Python
 # modules the pytest suites import (gmsh, meshio, numpy, grpc, protobuf), the programs they call
-# (openssl, nginx, protoc with the Python gRPC plugin, node and npm for the glTF validator) and the
+# (openssl, nginx, protoc with the Python gRPC plugin, node and npm for the glTF validator and
+# three.js, whose npm packages tests/cli installs under the build tree on first use) and the
 # sanitizer runtimes of the ASan/UBSan and TSan builds (gcc's, pulled in by build-essential).
 set -euo pipefail
 

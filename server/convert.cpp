@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -47,7 +48,8 @@ Result<MeshOptions> FromProto(const pb::MeshOptions& in) {
         {"rd_tolerance", in.rd_tolerance()},
         {"min_edge_length", in.min_edge_length()},
         {"max_edge_length", in.max_edge_length()},
-        {"timeout_seconds", in.timeout_seconds()}}) {
+        {"timeout_seconds", in.timeout_seconds()},
+        {"sharp_edge_angle", in.has_sharp_edge_angle() ? in.sharp_edge_angle() : 0.0}}) {
     Status status = CheckLength(name, value);
     if (!status.ok()) return status;
   }
@@ -62,6 +64,7 @@ Result<MeshOptions> FromProto(const pb::MeshOptions& in) {
   out.nurbs = in.nurbs();
   out.threads = in.threads();
   out.timeout_seconds = in.timeout_seconds();
+  if (in.has_sharp_edge_angle()) out.sharp_edge_angle = in.sharp_edge_angle();
   for (int id : in.face_ids()) {
     if (id < 1) return Invalid("face_ids are 1-based (got " + std::to_string(id) + ")");
     out.face_ids.push_back(id);
@@ -80,6 +83,7 @@ pb::MeshOptions ToProto(const MeshOptions& in) {
   out.set_nurbs(in.nurbs);
   out.set_threads(in.threads);
   out.set_timeout_seconds(in.timeout_seconds);
+  out.set_sharp_edge_angle(in.sharp_edge_angle);
   for (int id : in.face_ids) out.add_face_ids(id);
   return out;
 }
@@ -358,6 +362,35 @@ std::vector<pb::FaceNodeIds> SplitFaceNodeIds(const FaceMesh& face, const Mesh* 
   return parts;
 }
 
+std::vector<pb::EdgePolyline> SplitEdgeLine(const EdgeLine& line, std::size_t max_bytes) {
+  const auto nodes = static_cast<int64_t>(line.nodes.size());
+  // 10 bytes bound a varint int64; the faces (5 bytes each), flags and header fit the reserve.
+  const std::size_t reserve = 256 + 5 * line.faces.size();
+  const std::size_t per_part =
+      std::max<std::size_t>(1, (max_bytes > reserve ? max_bytes - reserve : 0) / 10);
+  pb::EdgePolyline header;
+  header.set_edge_id(line.edge_id);
+  header.set_node_count(nodes);
+  for (int32_t f : line.faces) header.add_faces(f);
+  header.set_seam(line.seam);
+  header.set_degenerate(line.degenerate);
+  header.set_sharp(line.sharp);
+  header.set_dihedral(line.dihedral);
+  std::vector<pb::EdgePolyline> parts;
+  int64_t node = 0;
+  do {
+    const int64_t end = std::min<int64_t>(nodes, node + static_cast<int64_t>(per_part));
+    pb::EdgePolyline part = header;
+    part.set_chunk_index(static_cast<int32_t>(parts.size()));
+    part.set_node_offset(node);
+    for (int64_t i = node; i < end; ++i) part.add_nodes(line.nodes[i]);
+    parts.push_back(std::move(part));
+    node = end;
+  } while (node < nodes);
+  for (pb::EdgePolyline& part : parts) part.set_chunk_count(static_cast<int32_t>(parts.size()));
+  return parts;
+}
+
 MeshResultBuilder::PendingFace& MeshResultBuilder::Slot(int face_id) {
   if (faces_.size() < static_cast<std::size_t>(face_id)) faces_.resize(face_id);
   return faces_[face_id - 1];
@@ -373,6 +406,8 @@ Status MeshResultBuilder::Add(const pb::MeshEvent& event) {
       return AddFace(event.face());
     case pb::MeshEvent::kNodeIds:
       return AddNodeIds(event.node_ids());
+    case pb::MeshEvent::kEdge:
+      return AddEdge(event.edge());
     case pb::MeshEvent::kSummary:
       summary_ = event.summary();
       has_summary_ = true;
@@ -448,6 +483,38 @@ Status MeshResultBuilder::AddNodeIds(const pb::FaceNodeIds& part) {
   return Status::Ok();
 }
 
+Status MeshResultBuilder::AddEdge(const pb::EdgePolyline& part) {
+  const std::string where = "EdgePolyline " + std::to_string(part.edge_id()) + " part " +
+                            std::to_string(part.chunk_index()) + ": ";
+  if (part.chunk_index() == 0) {
+    if (edge_parts_left_ != 0) return Invalid(where + "the previous edge is missing parts");
+    if (!edges_.empty() && part.edge_id() <= edges_.back().edge_id)
+      return Invalid(where + "not in edge id order");
+    EdgeLine line;
+    line.edge_id = part.edge_id();
+    line.faces.assign(part.faces().begin(), part.faces().end());
+    line.seam = part.seam();
+    line.degenerate = part.degenerate();
+    line.sharp = part.sharp();
+    line.dihedral = part.dihedral();
+    edges_.push_back(std::move(line));
+    edge_parts_left_ = part.chunk_count();
+  } else if (edge_parts_left_ == 0 || edges_.back().edge_id != part.edge_id() ||
+             part.node_offset() != static_cast<int64_t>(edges_.back().nodes.size())) {
+    return Invalid(where + "out of order");
+  }
+  for (int64_t node : part.nodes()) {
+    if (node < 0 || node > std::numeric_limits<int32_t>::max())
+      return Invalid(where + "node id out of range");
+    edges_.back().nodes.push_back(static_cast<int32_t>(node));
+  }
+  --edge_parts_left_;
+  if (edge_parts_left_ == 0 &&
+      static_cast<int64_t>(edges_.back().nodes.size()) != part.node_count())
+    return Invalid(where + "node count does not match the parts");
+  return Status::Ok();
+}
+
 Result<MeshResult> MeshResultBuilder::Finish() {
   if (!has_started_ || !has_summary_) return Invalid("the Mesh stream ended early");
   const int face_total = started_.model().faces();
@@ -511,6 +578,12 @@ Result<MeshResult> MeshResultBuilder::Finish() {
       mesh.triangle_face.push_back(id);
     }
   }
+  if (edge_parts_left_ != 0) return Invalid("an EdgePolyline is missing parts");
+  for (const EdgeLine& line : edges_)
+    for (int32_t node : line.nodes)
+      if (node >= nodes) return Invalid("an EdgePolyline node id is beyond the mesh's nodes");
+  result.edges = std::move(edges_);
+  edges_.clear();
   result.faces.reserve(face_total);
   for (PendingFace& entry : faces_) result.faces.push_back(std::move(entry.face));
   faces_.clear();

@@ -59,8 +59,13 @@ std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool
 std::vector<pb::FaceNodeIds> SplitFaceNodeIds(const FaceMesh& face, const Mesh* topology,
                                               std::size_t max_bytes = kMaxFaceMessageBytes);
 
-/// Rebuilds an engine MeshResult from the events of a Mesh stream: the inverse of the two
-/// functions above plus the summary. Parts of one face must arrive in chunk order; parts of
+/// Splits an edge line into EdgePolyline events of at most `max_bytes` each (at least one).
+std::vector<pb::EdgePolyline> SplitEdgeLine(const EdgeLine& line,
+                                            std::size_t max_bytes = kMaxFaceMessageBytes);
+
+/// Rebuilds an engine MeshResult from the events of a Mesh stream: the inverse of the three
+/// functions above plus the summary (MeshResult::edges from the EdgePolyline events, empty when
+/// the stream carried none). Parts of one face must arrive in chunk order; parts of
 /// different faces may interleave.
 class MeshResultBuilder {
  public:
@@ -89,9 +94,12 @@ class MeshResultBuilder {
   };
   Status AddFace(const pb::FaceMesh& part);
   Status AddNodeIds(const pb::FaceNodeIds& part);
+  Status AddEdge(const pb::EdgePolyline& part);
   PendingFace& Slot(int face_id);
 
   std::vector<PendingFace> faces_;  // index = face_id - 1
+  std::vector<EdgeLine> edges_;     // edge id order
+  int edge_parts_left_ = 0;         // parts of edges_.back() still to come
   pb::Started started_;
   pb::Summary summary_;
   bool has_started_ = false;

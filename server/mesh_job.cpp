@@ -225,6 +225,15 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
       if (!write(out)) return Status(StatusCode::kCancelled, "client went away");
     }
   }
+  if (params_.with_edges) {
+    for (const EdgeLine& line : mesh.edges) {
+      for (pb::EdgePolyline& part : SplitEdgeLine(line)) {
+        pb::MeshEvent out;
+        *out.mutable_edge() = std::move(part);
+        if (!write(out)) return Status(StatusCode::kCancelled, "client went away");
+      }
+    }
+  }
   summary_ = mesh.summary;
   pb::MeshEvent out;
   pb::Summary* summary = out.mutable_summary();

@@ -30,6 +30,7 @@ class MeshJob {
     bool with_uv = false;
     bool with_normals = false;
     bool with_topology = false;  ///< FaceNodeIds carry node_dim, node_entity and node_param
+    bool with_edges = false;     ///< EdgePolyline events (MeshResult::edges) before the Summary
     /// The server's --max-triangles: the run is stopped (RESOURCE_EXHAUSTED) when the faces
     /// streamed so far pass it. 0 = no limit.
     int64_t max_triangles = 0;
@@ -50,7 +51,8 @@ class MeshJob {
   /// `active_jobs` counts engine runs in progress (for GetServerStatus); not owned.
   MeshJob(Params params, const RequestLog* log, std::atomic<int>* active_jobs);
 
-  /// Runs the engine and streams Progress, FaceMesh, FaceNodeIds and Summary events (the caller
+  /// Runs the engine and streams Progress, FaceMesh, FaceNodeIds, EdgePolyline (with_edges) and
+  /// Summary events (the caller
   /// sends Started). Returns when the engine thread has finished: ok after the Summary, or why not
   /// (kCancelled, kDeadlineExceeded, kResourceExhausted, or the engine's error).
   Status Run(const WriteFn& write, const CancelledFn& cancelled);

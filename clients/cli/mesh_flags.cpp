@@ -91,7 +91,8 @@ void AddMeshFlags(CLI::App* app, MeshFlags* flags) {
   app->add_flag("--edges,!--no-edges", flags->write.edges,
                 "Also write every B-rep edge as line elements along its shared edge grid "
                 "(.msh: type-1 lines on the edge's curve entity; .obj: `l` records in group "
-                "'edges'); default on")
+                "'edges'; .glb: LINES primitives with _EDGE_ID under the node 'edges'); "
+                "default on")
       ->group("Output");
   app->add_flag("--msh-parametric", flags->write.msh_parametric,
                 ".msh: also write each node's curve parameter t or surface (u,v) (parametric "

@@ -56,22 +56,24 @@ std::optional<gp_Dir> FaceNormalOnEdge(const TopoDS_Face& face, const TopoDS_Edg
   }
 }
 
-// Largest angle (degrees) between the faces' normals at the edge's parameter midpoint; -1 when
-// a normal is undefined.
-double Dihedral(const Model& model, const TopoDS_Edge& edge, const std::vector<int32_t>& faces) {
-  double first, last;
-  BRep_Tool::Range(edge, first, last);
-  const double mid = 0.5 * (first + last);
+// Largest angle (degrees) between the faces' exact normals over the curve parameters `ts` (the
+// edge's nodes); -1 when a normal is undefined at every parameter.
+double Dihedral(const Model& model, const TopoDS_Edge& edge, const std::vector<int32_t>& faces,
+                const std::vector<double>& ts) {
+  double largest = -1.0;
   std::vector<gp_Dir> normals;
-  for (int32_t f : faces) {
-    std::optional<gp_Dir> normal = FaceNormalOnEdge(model.face(f), edge, mid);
-    if (!normal) return -1.0;
-    normals.push_back(*normal);
+  for (double t : ts) {
+    normals.clear();
+    for (int32_t f : faces) {
+      std::optional<gp_Dir> normal = FaceNormalOnEdge(model.face(f), edge, t);
+      if (!normal) break;
+      normals.push_back(*normal);
+    }
+    if (normals.size() != faces.size()) continue;  // singular here (a cone's apex)
+    for (size_t i = 0; i < normals.size(); ++i)
+      for (size_t j = i + 1; j < normals.size(); ++j)
+        largest = std::max(largest, normals[i].Angle(normals[j]) * 180.0 / kPi);
   }
-  double largest = 0.0;
-  for (size_t i = 0; i < normals.size(); ++i)
-    for (size_t j = i + 1; j < normals.size(); ++j)
-      largest = std::max(largest, normals[i].Angle(normals[j]) * 180.0 / kPi);
   return largest;
 }
 
@@ -168,8 +170,14 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
       line.nodes.erase(std::unique(line.nodes.begin(), line.nodes.end()), line.nodes.end());
 
       line.degenerate = BRep_Tool::Degenerated(edge) || line.nodes.size() < 2;
-      if (!line.degenerate && !line.seam && line.faces.size() >= 2)
-        line.dihedral = Dihedral(model, edge, line.faces);
+      if (!line.degenerate && !line.seam && line.faces.size() >= 2) {
+        double first_t, last_t;
+        BRep_Tool::Range(edge, first_t, last_t);
+        std::vector<double> ts = {first_t};
+        for (const auto& [t, node] : inner) ts.push_back(t);
+        ts.push_back(last_t);
+        line.dihedral = Dihedral(model, edge, line.faces, ts);
+      }
       const bool free = line.faces.size() == 1 && !line.seam && !line.degenerate;
       line.sharp = free || line.dihedral > sharp_angle;
       lines.push_back(std::move(line));

@@ -1,5 +1,9 @@
 #include "face_mesher.h"
 
+#include <BRep_Tool.hxx>
+#include <GeomLProp_SLProps.hxx>
+#include <Geom_Surface.hxx>
+#include <Precision.hxx>
 #include <Standard_Failure.hxx>
 #include <TopoDS.hxx>
 #include <chrono>
@@ -58,6 +62,39 @@ void Extract(const WorkMesh& m, bool reversed, FaceMesh* f, std::vector<NodeRef>
     }
     if (reversed) std::swap(ids[1], ids[2]);
     f->triangles.insert(f->triangles.end(), {ids[0], ids[1], ids[2]});
+  }
+}
+
+// Where the surface's first derivatives leave the normal undefined (a pole, as a sphere's), the
+// exact normal from OCCT's GeomLProp_SLProps (higher derivatives) instead of the refinement's
+// estimate (Surface::Normal: the mean of four normals around the pole, about a degree off).
+// Boundary nodes only, where poles lie; it changes no node or triangle. `f` is in the face's
+// own (u,v): not for a face meshed on its B-spline conversion.
+void ExactPoleNormals(const TopoDS_Face& face, const std::vector<NodeRef>& refs, FaceMesh* f) {
+  TopLoc_Location location;
+  Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
+  if (surface.IsNull() || refs.size() * 3 != f->normals.size() || refs.size() * 2 != f->uv.size())
+    return;
+  const gp_Trsf to_world = location.Transformation();
+  for (size_t i = 0; i < refs.size(); ++i) {
+    if (refs[i].dim > 1) continue;
+    const double u = f->uv[2 * i], v = f->uv[2 * i + 1];
+    gp_Pnt point;
+    gp_Vec du, dv;
+    surface->D1(u, v, point, du, dv);
+    const double scale = du.SquareMagnitude() + dv.SquareMagnitude();
+    if (scale > 0 && du.Crossed(dv).SquareMagnitude() > 1e-16 * scale * scale) continue;
+    GeomLProp_SLProps props(surface, u, v, 2, Precision::Confusion());
+    if (!props.IsNormalDefined()) continue;  // a cone's apex: no one normal
+    gp_Vec exact(props.Normal());
+    exact.Transform(to_world);
+    double* n = &f->normals[3 * i];
+    const gp_Vec estimate(n[0], n[1], n[2]);
+    if (estimate.Magnitude() == 0.0) continue;
+    double angle = exact.Angle(estimate);
+    if (angle > M_PI / 2) exact.Reverse(), angle = M_PI - angle;
+    if (angle > 5.0 * M_PI / 180.0) continue;  // not the pole the estimate is near
+    n[0] = exact.X(), n[1] = exact.Y(), n[2] = exact.Z();
   }
 }
 
@@ -129,6 +166,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     }
     Extract(m, face.Orientation() == TopAbs_REVERSED, &f, refs);
     if (f.triangles.empty()) return Failed(f, "no triangles survived");
+    if (!job.nurbs) ExactPoleNormals(face, *refs, &f);
     f.max_deviation = stats.max_deviation;
     f.status = FaceStatus::kOk;
     if (stats.budget_hit)

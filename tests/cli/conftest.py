@@ -70,25 +70,32 @@ def run(cli):
     return run_cli
 
 
-@pytest.fixture(scope="session")
-def gltf_validate():
-    """Validates a .glb with the Khronos glTF validator (npm gltf-validator, installed on first
-    use under the build tree)."""
+def _node_script(package, name, source):
+    """A function running the node script `source` (saved as `name` in the build tree's
+    node_tools directory, where the npm `package` is installed on first use) on a path and
+    returning its JSON output."""
     node_dir = _env_path("RDMESH_NODE_DIR")
-    if not (node_dir / "node_modules" / "gltf-validator").is_dir():
+    if not (node_dir / "node_modules" / package).is_dir():
         node_dir.mkdir(parents=True, exist_ok=True)
         subprocess.run(["npm", "install", "--prefix", str(node_dir), "--no-audit", "--no-fund",
-                        "gltf-validator"], check=True, capture_output=True, timeout=600)
-    script = node_dir / "validate_gltf.js"
-    script.write_text(GLTF_VALIDATE_JS)
+                        package], check=True, capture_output=True, timeout=600)
+    script = node_dir / name
+    script.write_text(source)
 
-    def validate(path):
+    def run_script(path):
         completed = subprocess.run(["node", str(script), str(path)], capture_output=True,
                                    text=True, timeout=300, cwd=node_dir)
         assert completed.returncode == 0, completed.stderr
         return json.loads(completed.stdout)
 
-    return validate
+    return run_script
+
+
+@pytest.fixture(scope="session")
+def gltf_validate():
+    """Validates a .glb with the Khronos glTF validator (npm gltf-validator, installed on first
+    use under the build tree)."""
+    return _node_script("gltf-validator", "validate_gltf.js", GLTF_VALIDATE_JS)
 
 
 @pytest.fixture(scope="session")
@@ -109,3 +116,55 @@ def meshbench(shared_dir):
         return json.loads(completed.stdout.strip().splitlines()[-1])
 
     return evaluate
+
+
+THREE_LOAD_MJS = r"""
+import fs from 'fs';
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+const bytes = fs.readFileSync(process.argv[2]);
+const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+new GLTFLoader().parse(buffer, '', (gltf) => {
+  gltf.scene.updateMatrixWorld(true);
+  const objects = [];
+  gltf.scene.traverse((o) => {
+    if (!o.isMesh && !o.isLineSegments) return;
+    const g = o.geometry;
+    const item = {kind: o.isMesh ? 'triangles' : 'lines', name: o.name,
+                  attributes: Object.keys(g.attributes),
+                  position: Array.from(g.attributes.position.clone().applyMatrix4(o.matrixWorld).array),
+                  index: g.index ? Array.from(g.index.array) : null};
+    if (g.attributes.normal) {
+      const matrix = new THREE.Matrix3().getNormalMatrix(o.matrixWorld);
+      item.normal = Array.from(g.attributes.normal.clone().applyNormalMatrix(matrix).array);
+    }
+    // GLTFLoader names a custom attribute _FOO as the lower-case _foo.
+    if (g.attributes._face_id) item.face_id = Array.from(g.attributes._face_id.array);
+    // A node drawing an instanced part's mesh at another instance maps the ids (node extras
+    // become userData, on the mesh or on the group of its primitives).
+    for (let p = o; p; p = p.parent) {
+      if (p.userData && p.userData.rdmesh && p.userData.rdmesh.face_ids) {
+        item.face_map = p.userData.rdmesh.face_ids;
+        break;
+      }
+    }
+    if (g.attributes._edge_id) item.edge_id = Array.from(g.attributes._edge_id.array);
+    objects.push(item);
+  });
+  console.log(JSON.stringify({extras: gltf.parser.json.extras || null,
+                              primitives: gltf.parser.json.meshes.map((m) => m.primitives.map(
+                                  (p) => ({mode: p.mode === undefined ? 4 : p.mode,
+                                           extras: p.extras || null}))),
+                              objects}));
+}, (error) => { console.error(String(error)); process.exit(1); });
+"""
+
+
+@pytest.fixture(scope="session")
+def three_load():
+    """Loads a .glb with three.js's GLTFLoader in node (npm three, installed on first use under
+    the build tree): -> dict with the file's root `extras`, every mesh's primitives (mode,
+    extras) and every drawn object (`triangles` or `lines`) with world-space positions (metres,
+    +Y up), normals, index, the _face_id / _edge_id attributes as three.js reads them and the
+    instance's `face_map` (extras.rdmesh.face_ids of its node) when there is one."""
+    return _node_script("three", "three_load.mjs", THREE_LOAD_MJS)

@@ -11,6 +11,8 @@
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
+#include <cmath>
+#include <gp_Vec.hxx>
 #include <map>
 #include <set>
 #include <string>
@@ -155,6 +157,27 @@ TEST(EdgeLinesTest, CylinderSeamAndSphereSeamAndPoles) {
     EXPECT_FALSE(line.sharp);
   }
   EXPECT_EQ(degenerate, 2);
+}
+
+// The normals the writers and the service hand out are the surface's exact ones at every node,
+// the sphere's poles included (where the first derivatives vanish: the refinement's estimate
+// there, a mean of normals around the pole, was about a degree off).
+TEST(FaceNormalsTest, ExactAtEveryNodePolesIncluded) {
+  auto sphere = LoadShape(BRepPrimAPI_MakeSphere(5.0).Shape(), "normals_sphere");
+  ASSERT_TRUE(sphere);
+  MeshResult r = MeshOrDie(*sphere);
+  int poles = 0;
+  for (const FaceMesh& face : r.faces) {
+    ASSERT_EQ(face.normals.size(), face.xyz.size());
+    for (int64_t i = 0; i < face.node_count(); ++i) {
+      const gp_Vec radial(face.xyz[3 * i], face.xyz[3 * i + 1], face.xyz[3 * i + 2]);
+      const gp_Vec normal(face.normals[3 * i], face.normals[3 * i + 1], face.normals[3 * i + 2]);
+      EXPECT_NEAR(normal.Magnitude(), 1.0, 1e-12);
+      EXPECT_LT(normal.Angle(radial), 1e-6) << "node " << i << " at z " << radial.Z();
+      poles += std::abs(std::abs(radial.Z()) - 5.0) < 1e-9;
+    }
+  }
+  EXPECT_GE(poles, 2);
 }
 
 TEST(EdgeLinesTest, RebuiltFromTheMeshAlone) {

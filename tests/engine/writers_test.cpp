@@ -15,10 +15,12 @@
 #include <STEPControl_Writer.hxx>
 #include <TDataStd_Name.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -294,14 +296,15 @@ GlbCounts ReadGlb(const std::string& path) {
   std::set<int> index_accessors;  // OCCT shares the buffers of an instanced part's meshes
   for (const auto& mesh : json["meshes"])
     for (const auto& primitive : mesh["primitives"])
-      index_accessors.insert(primitive["indices"].get<int>());
+      if (primitive.value("mode", 4) == 4) index_accessors.insert(primitive["indices"].get<int>());
   counts.stored_meshes = index_accessors.size();
   std::function<void(int)> visit = [&](int node) {
     const nlohmann::json& n = json["nodes"][node];
     if (n.contains("mesh"))
       for (const auto& primitive : json["meshes"][n["mesh"].get<int>()]["primitives"])
-        counts.drawn_triangles +=
-            json["accessors"][primitive["indices"].get<int>()]["count"].get<int64_t>() / 3;
+        if (primitive.value("mode", 4) == 4)  // triangles; the edges are LINES (mode 1)
+          counts.drawn_triangles +=
+              json["accessors"][primitive["indices"].get<int>()]["count"].get<int64_t>() / 3;
     if (n.contains("children"))
       for (const auto& child : n["children"]) visit(child.get<int>());
   };
@@ -442,28 +445,57 @@ TEST_F(WritersTest, EveryFormatReadsBack) {
     std::sscanf(line.c_str(), "element vertex %ld", &ply_vertices);
     std::sscanf(line.c_str(), "element face %ld", &ply_faces);
   }
-  EXPECT_EQ(ply_vertices, nodes);
+  // Vertices per face: each face has its own copy of its 9 nodes, with the face's exact
+  // normal (a box face's normal is its axis), and node_id gives back the watertight mesh.
+  EXPECT_EQ(ply_vertices, 6 * 9);
   ASSERT_EQ(ply_faces, triangles);
-  for (int64_t i = 0; i < nodes; ++i) {
+  std::vector<int64_t> node_of(ply_vertices);
+  std::vector<gp_XYZ> normal_of(ply_vertices);
+  std::set<int64_t> node_ids;
+  for (int64_t i = 0; i < ply_vertices; ++i) {
     double x, y, z, nx, ny, nz;
-    ply >> x >> y >> z >> nx >> ny >> nz;
+    int64_t node;
+    ply >> x >> y >> z >> nx >> ny >> nz >> node;
+    ASSERT_TRUE(node >= 0 && node < nodes) << node;
+    EXPECT_EQ(x, result.mesh.xyz[3 * node]);
+    EXPECT_EQ(z, result.mesh.xyz[3 * node + 2]);
+    EXPECT_NEAR(std::abs(nx) + std::abs(ny) + std::abs(nz), 1.0, 1e-6);  // an axis
     EXPECT_NEAR(std::sqrt(nx * nx + ny * ny + nz * nz), 1.0, 1e-6);
-    EXPECT_GT(nx * (x - 5) + ny * (y - 10) + nz * (z - 15), 0.0);  // averaged normals point out
+    node_of[i] = node;
+    normal_of[i] = gp_XYZ(nx, ny, nz);
+    node_ids.insert(node);
   }
+  EXPECT_EQ(static_cast<int64_t>(node_ids.size()), nodes);
+  std::map<int64_t, int> face_of_vertex;
   for (int64_t t = 0; t < triangles; ++t) {
-    int count, a, b, c, face_id;
-    ply >> count >> a >> b >> c >> face_id;
+    int count, face_id;
+    int64_t corner[3];
+    ply >> count >> corner[0] >> corner[1] >> corner[2] >> face_id;
     EXPECT_EQ(count, 3);
-    EXPECT_EQ(a, result.mesh.triangles[3 * t]);
     EXPECT_EQ(face_id, result.mesh.triangle_face[t]);
+    const int32_t* mesh_corner = &result.mesh.triangles[3 * t];
+    auto at = [&](int32_t node) {
+      const double* p = &result.mesh.xyz[3 * static_cast<int64_t>(node)];
+      return gp_XYZ(p[0], p[1], p[2]);
+    };
+    gp_XYZ a = at(mesh_corner[0]), b = at(mesh_corner[1]), c = at(mesh_corner[2]);
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_TRUE(corner[k] >= 0 && corner[k] < ply_vertices);
+      EXPECT_EQ(node_of[corner[k]], mesh_corner[k]);  // the same triangle, node for node
+      // The face's normal: along the triangle's own and outward.
+      EXPECT_NEAR(normal_of[corner[k]].Dot((b - a).Crossed(c - a).Normalized()), 1.0, 1e-9);
+      auto [it, added] = face_of_vertex.try_emplace(corner[k], face_id);
+      EXPECT_EQ(it->second, face_id) << "a vertex shared by two faces";
+    }
   }
   EXPECT_TRUE(ply.good());
 
   ASSERT_TRUE(WriteMesh(*model, result, Path("box.vtu")).ok());
   std::string vtu = ReadBytes(Path("box.vtu"));
-  EXPECT_NE(vtu.find("NumberOfPoints=\"" + std::to_string(nodes) + "\" NumberOfCells=\"" +
+  EXPECT_NE(vtu.find("NumberOfPoints=\"" + std::to_string(6 * 9) + "\" NumberOfCells=\"" +
                      std::to_string(triangles) + "\""),
             std::string::npos);
+  EXPECT_NE(vtu.find("Name=\"node_id\""), std::string::npos);
   EXPECT_NE(vtu.find("Name=\"face_id\""), std::string::npos);
   EXPECT_NE(vtu.find("Name=\"Normals\""), std::string::npos);
 
@@ -529,6 +561,34 @@ TEST_F(WritersTest, InstancesShareOneGltfMesh) {
   EXPECT_EQ(glb.drawn_triangles, triangles);
   EXPECT_EQ(glb.stored_meshes, 1u);  // stored once, placed twice
   EXPECT_NE(glb.json.dump().find("brick"), std::string::npos);
+  // The stored mesh's _FACE_ID are the lent instance's (faces 1..6); the node that draws it at
+  // the other instance maps them to that instance's faces, each the lent face moved by +100 x.
+  int mapped_nodes = 0;
+  for (const auto& node : glb.json["nodes"]) {
+    if (!node.contains("mesh")) continue;
+    if (!node.contains("extras")) continue;
+    ++mapped_nodes;
+    const auto& map = node["extras"]["rdmesh"]["face_ids"];
+    ASSERT_EQ(map.size(), 6u);
+    std::set<int> to;
+    for (const auto& [from, own] : map.items()) {
+      const int lent = std::stoi(from), face = own.get<int>();
+      EXPECT_TRUE(lent >= 1 && lent <= 6) << lent;
+      to.insert(face);
+      std::set<std::array<double, 3>> moved, own_corners;
+      for (TopExp_Explorer it(model->face(lent), TopAbs_VERTEX); it.More(); it.Next()) {
+        gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(it.Current()));
+        moved.insert({std::round(p.X() + 100.0), std::round(p.Y()), std::round(p.Z())});
+      }
+      for (TopExp_Explorer it(model->face(face), TopAbs_VERTEX); it.More(); it.Next()) {
+        gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(it.Current()));
+        own_corners.insert({std::round(p.X()), std::round(p.Y()), std::round(p.Z())});
+      }
+      EXPECT_EQ(own_corners, moved) << lent << " -> " << face;
+    }
+    EXPECT_EQ(to, (std::set<int>{7, 8, 9, 10, 11, 12}));
+  }
+  EXPECT_EQ(mapped_nodes, 1);
 
   ASSERT_TRUE(WriteMesh(*model, result, Path("pair.obj")).ok());
   Obj obj = ReadObj(Path("pair.obj"));

@@ -78,3 +78,38 @@ def test_every_output_format_writes_the_triangles(tmp_path, ext):
     assert sum(len(c.data) for c in mesh.cells) == 2
     with pytest.raises(ValueError, match="unsupported"):
         write_mesh(str(tmp_path / "out.xyz"), result)
+
+
+def test_edge_parts_join_chunks_into_flat_arrays():
+    from rdmesh import RdmeshError, pb
+    from rdmesh.client import _EdgeParts
+
+    def part(edge_id, index, count, nodes, faces=(1, 2), **flags):
+        return pb.EdgePolyline(edge_id=edge_id, chunk_index=index, chunk_count=count,
+                               nodes=nodes, faces=faces, **flags)
+
+    parts = _EdgeParts()
+    parts.add(part(2, 0, 2, [0, 1], sharp=True, dihedral=90.0))
+    parts.add(part(2, 1, 2, [2, 3], sharp=True, dihedral=90.0))
+    parts.add(part(5, 0, 1, [4, 4], faces=[3], seam=True, dihedral=-1.0))
+    edges = parts.result()
+    assert len(edges) == 2 and edges.edge_id.tolist() == [2, 5]
+    assert edges.polyline(0).tolist() == [0, 1, 2, 3] and edges.polyline(1).tolist() == [4, 4]
+    assert edges.faces(0).tolist() == [1, 2] and edges.faces(1).tolist() == [3]
+    assert edges.sharp.tolist() == [True, False] and edges.seam.tolist() == [False, True]
+    assert edges.dihedral.tolist() == [90.0, -1.0]
+    assert edges.nodes.dtype == np.int64 and edges.offsets.tolist() == [0, 4, 6]
+
+    broken = _EdgeParts()
+    broken.add(part(2, 0, 3, [0]))
+    with pytest.raises(RdmeshError):
+        broken.add(part(3, 0, 1, [1]))  # edge 2 still misses parts
+    unfinished = _EdgeParts()
+    unfinished.add(part(2, 0, 2, [0]))
+    with pytest.raises(RdmeshError):
+        unfinished.result()
+    backwards = _EdgeParts()
+    backwards.add(part(4, 0, 1, [0]))
+    with pytest.raises(RdmeshError):
+        backwards.add(part(3, 0, 1, [1]))
+    assert len(_EdgeParts().result()) == 0

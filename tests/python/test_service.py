@@ -120,6 +120,48 @@ def test_mesh_assembles_a_watertight_mesh(client):
     assert (counts == 2).all(), "free or non-manifold edges: %s" % np.bincount(counts)
 
 
+def test_mesh_edges_as_numpy_polylines(client):
+    """edges=True: EdgePolyline events after the node ids and before the summary, one per edge
+    in edge id order, that the client turns into numpy arrays: each polyline runs along sides
+    of triangles of every face it names, the cube's edges are sharp at 90 degrees, the
+    cylinder's seam is flagged; sharp_edge_angle moves the sharp flags and nothing else."""
+    model = client.upload(CUBE)
+    plain = [e.WhichOneof("event") for e in client.mesh_stream(model)]
+    assert "edge" not in plain
+    events = list(client.mesh_stream(model, edges=True))
+    kinds = [e.WhichOneof("event") for e in events]
+    first_edge = kinds.index("edge")
+    assert "node_ids" not in kinds[first_edge:] and kinds[-1] == "summary"
+    assert set(kinds[first_edge:-1]) == {"edge"}
+
+    result = client.mesh(model, edges=True)
+    edges = result.edges
+    assert len(edges) == model.edges == 15
+    assert edges.edge_id.tolist() == list(range(1, model.edges + 1))
+    assert len(edges.offsets) == len(edges) + 1 and edges.offsets[-1] == len(edges.nodes)
+    assert edges.nodes.min() >= 0 and edges.nodes.max() < len(result.xyz)
+    sides = {}
+    for (a, b, c), f in zip(result.triangles.tolist(), result.triangle_face.tolist()):
+        for side in ((a, b), (b, c), (c, a)):
+            sides.setdefault(frozenset(side), set()).add(f)
+    for i in range(len(edges)):
+        line, faces = edges.polyline(i), edges.faces(i)
+        assert len(line) >= 2 and len(faces) >= 1
+        for a, b in zip(line[:-1], line[1:]):
+            assert sides[frozenset((int(a), int(b)))] == set(faces.tolist())
+        assert edges.sharp[i] == (edges.dihedral[i] > 30.0 or (len(faces) == 1
+                                                                 and not edges.seam[i]))
+    cube = [i for i in range(len(edges)) if edges.faces(i).min() >= 4]
+    assert len(cube) == 12
+    assert np.allclose(edges.dihedral[cube], 90.0) and edges.sharp[cube].all()
+    assert edges.seam.sum() == 1 and edges.dihedral[edges.seam][0] == -1.0
+    blunt = client.mesh(model, edges=True, sharp_edge_angle=95.0)
+    assert not blunt.edges.sharp[cube].any()
+    assert np.array_equal(blunt.triangles, result.triangles)
+    assert np.array_equal(blunt.edges.nodes, edges.nodes)
+    assert client.mesh(model).edges is None
+
+
 def test_mesh_options_change_the_mesh(client):
     model = client.upload(CYLINDER)
     coarse = client.mesh(model, max_deviation_rel=2e-3)
@@ -174,6 +216,7 @@ def test_bad_models_are_invalid_argument_and_the_daemon_stays_up(daemon, client,
     ({"threads": -2}, "threads"),
     ({"face_ids": [0]}, "face"),
     ({"face_ids": [1, 10000]}, "10000"),
+    ({"sharp_edge_angle": 200.0}, "sharp_edge_angle"),
 ])
 def test_out_of_range_options_are_invalid_argument(daemon, client, options, field):
     with pytest.raises(RdmeshError) as error:

@@ -42,6 +42,7 @@ TEST(ConvertOptionsTest, RoundTrip) {
   in.threads = 3;
   in.face_ids = {4, 1, 9};
   in.timeout_seconds = 7.5;
+  in.sharp_edge_angle = 45.0;
   Result<MeshOptions> out = FromProto(ToProto(in));
   ASSERT_TRUE(out.ok()) << out.status().ToString();
   EXPECT_EQ(out->max_deviation, in.max_deviation);
@@ -54,6 +55,8 @@ TEST(ConvertOptionsTest, RoundTrip) {
   EXPECT_EQ(out->threads, in.threads);
   EXPECT_EQ(out->face_ids, in.face_ids);
   EXPECT_EQ(out->timeout_seconds, in.timeout_seconds);
+  EXPECT_EQ(out->sharp_edge_angle, in.sharp_edge_angle);
+  EXPECT_EQ(FromProto(pb::MeshOptions())->sharp_edge_angle, kDefaultSharpEdgeAngle);
 }
 
 TEST(ConvertOptionsTest, RejectsValuesNoRunAccepts) {
@@ -389,6 +392,106 @@ TEST(MeshResultBuilderTest, RefusesIncompleteOrDisorderedStreams) {
     ASSERT_TRUE(builder.Add(event).ok());
     *event.mutable_face() = parts[2];
     EXPECT_EQ(builder.Add(event).code(), StatusCode::kInvalidArgument);
+  }
+}
+
+TEST(SplitEdgeLineTest, LongEdgeSplitsUnderTheLimitAndJoinsBack) {
+  const std::vector<FaceMesh> faces = TwoWeldedFaces();
+  EdgeLine shared;  // the side the two faces share, nodes 1 and 2
+  shared.edge_id = 2;
+  shared.nodes = {1, 2};
+  shared.faces = {1, 3};
+  shared.sharp = true;
+  shared.dihedral = 90.0;
+  EdgeLine seam;  // a long closed polyline over nodes 0..3, in small messages
+  seam.edge_id = 5;
+  seam.faces = {3};
+  seam.seam = true;
+  for (int i = 0; i < 5000; ++i) seam.nodes.push_back(i % 4);
+  seam.nodes.push_back(0);
+  EXPECT_EQ(SplitEdgeLine(shared).size(), 1u);
+  const std::vector<pb::EdgePolyline> parts = SplitEdgeLine(seam, 4096);
+  ASSERT_GT(parts.size(), 10u);
+  for (const pb::EdgePolyline& part : parts) {
+    pb::MeshEvent event;
+    *event.mutable_edge() = part;
+    EXPECT_LE(event.ByteSizeLong(), 4096u);
+    EXPECT_EQ(part.chunk_count(), static_cast<int>(parts.size()));
+    EXPECT_EQ(part.faces_size(), 1);
+    EXPECT_TRUE(part.seam());
+  }
+
+  MeshResultBuilder builder;
+  ASSERT_TRUE(builder.Add(StartedEvent(4)).ok());
+  Stream(faces[0], nullptr, &builder);
+  Stream(faces[1], nullptr, &builder);
+  for (const EdgeLine& line : {shared, seam}) {
+    for (pb::EdgePolyline& part : SplitEdgeLine(line, 4096)) {
+      pb::MeshEvent event;
+      *event.mutable_edge() = std::move(part);
+      ASSERT_TRUE(builder.Add(event).ok());
+    }
+  }
+  ASSERT_TRUE(builder.Add(SummaryEvent(4, 2)).ok());
+  Result<MeshResult> result = builder.Finish();
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  ASSERT_EQ(result->edges.size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    const EdgeLine& sent = i == 0 ? shared : seam;
+    const EdgeLine& got = result->edges[i];
+    EXPECT_EQ(got.edge_id, sent.edge_id);
+    EXPECT_EQ(got.nodes, sent.nodes);
+    EXPECT_EQ(got.faces, sent.faces);
+    EXPECT_EQ(got.seam, sent.seam);
+    EXPECT_EQ(got.degenerate, sent.degenerate);
+    EXPECT_EQ(got.sharp, sent.sharp);
+    EXPECT_EQ(got.dihedral, sent.dihedral);
+  }
+}
+
+TEST(SplitEdgeLineTest, BuilderRefusesDisorderedOrIncompleteEdges) {
+  const std::vector<FaceMesh> faces = TwoWeldedFaces();
+  EdgeLine line;
+  line.edge_id = 3;
+  for (int i = 0; i < 3000; ++i) line.nodes.push_back(i % 4);
+  const std::vector<pb::EdgePolyline> parts = SplitEdgeLine(line, 4096);
+  ASSERT_GT(parts.size(), 2u);
+  const auto event = [](const pb::EdgePolyline& part) {
+    pb::MeshEvent e;
+    *e.mutable_edge() = part;
+    return e;
+  };
+  {
+    MeshResultBuilder builder;  // a skipped part
+    ASSERT_TRUE(builder.Add(event(parts[0])).ok());
+    EXPECT_EQ(builder.Add(event(parts[2])).code(), StatusCode::kInvalidArgument);
+  }
+  {
+    MeshResultBuilder builder;  // edge ids must increase
+    pb::EdgePolyline one = SplitEdgeLine(line)[0];
+    ASSERT_TRUE(builder.Add(event(one)).ok());
+    EXPECT_EQ(builder.Add(event(one)).code(), StatusCode::kInvalidArgument);
+  }
+  {
+    MeshResultBuilder builder;  // the stream ends inside an edge
+    ASSERT_TRUE(builder.Add(StartedEvent(4)).ok());
+    Stream(faces[0], nullptr, &builder);
+    Stream(faces[1], nullptr, &builder);
+    ASSERT_TRUE(builder.Add(event(parts[0])).ok());
+    ASSERT_TRUE(builder.Add(SummaryEvent(4, 2)).ok());
+    EXPECT_EQ(builder.Finish().status().code(), StatusCode::kInvalidArgument);
+  }
+  {
+    MeshResultBuilder builder;  // a node beyond the mesh
+    ASSERT_TRUE(builder.Add(StartedEvent(4)).ok());
+    Stream(faces[0], nullptr, &builder);
+    Stream(faces[1], nullptr, &builder);
+    EdgeLine beyond;
+    beyond.edge_id = 1;
+    beyond.nodes = {0, 7};
+    ASSERT_TRUE(builder.Add(event(SplitEdgeLine(beyond)[0])).ok());
+    ASSERT_TRUE(builder.Add(SummaryEvent(4, 2)).ok());
+    EXPECT_EQ(builder.Finish().status().code(), StatusCode::kInvalidArgument);
   }
 }
 

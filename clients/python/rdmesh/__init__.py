@@ -27,9 +27,9 @@ except ImportError as _error:  # pragma: no cover - depends on the build
         "`ninja -C build rdmesh_python_stubs` (or set RDMESH_PY_GEN_DIR)" % _GEN_DIR) from _error
 
 from rdmesh.assemble import assemble  # noqa: E402
-from rdmesh.client import (Client, FaceResult, MeshResult, Progress,  # noqa: E402
+from rdmesh.client import (Client, Edges, FaceResult, MeshResult, Progress,  # noqa: E402
                            RdmeshError)
 
-__all__ = ["Client", "FaceResult", "MeshResult", "Progress", "RdmeshError", "assemble", "pb",
+__all__ = ["Client", "Edges", "FaceResult", "MeshResult", "Progress", "RdmeshError", "assemble", "pb",
            "pb_grpc"]
 __version__ = "0.1.0"

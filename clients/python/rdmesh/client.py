@@ -21,7 +21,7 @@ MODEL_HEADER = "x-rdmesh-model"
 _MODEL_ID = re.compile(r"^[0-9a-f]{64}$")
 _OPTION_NAMES = {"max_deviation", "max_deviation_rel", "rd_tolerance", "max_triangles",
                  "min_edge_length", "max_edge_length", "nurbs", "threads", "face_ids",
-                 "timeout_seconds"}
+                 "timeout_seconds", "sharp_edge_angle"}
 _STAGES = {pb.STAGE_LOADING: "loading", pb.STAGE_EDGES: "edges", pb.STAGE_FACES: "faces",
            pb.STAGE_ASSEMBLY: "assembly", pb.STAGE_DONE: "done"}
 _FACE_STATUS = {pb.FACE_STATUS_OK: "ok", pb.FACE_STATUS_FAILED: "failed",
@@ -69,6 +69,72 @@ class FaceResult:
 
 
 @dataclass
+class Edges:
+    """The B-rep edges of the assembled mesh as polylines (EdgePolyline events), in edge id
+    order, as flat numpy arrays: edge i's node ids are nodes[offsets[i]:offsets[i + 1]] (rows of
+    MeshResult.xyz, in curve order) and its faces face_ids[face_offsets[i]:face_offsets[i + 1]]."""
+    edge_id: np.ndarray  # (E,) int32, 1..ModelInfo.edges
+    offsets: np.ndarray  # (E + 1,) int64 into nodes
+    nodes: np.ndarray  # (K,) int64, node ids of the assembled mesh
+    face_offsets: np.ndarray  # (E + 1,) int64 into face_ids
+    face_ids: np.ndarray  # (M,) int32, the faces each edge bounds, ascending
+    seam: np.ndarray  # (E,) bool: a face lies on both sides
+    degenerate: np.ndarray  # (E,) bool: no extent in 3D
+    sharp: np.ndarray  # (E,) bool: dihedral over sharp_edge_angle, or a free edge
+    dihedral: np.ndarray  # (E,) float64 degrees: largest over the nodes; -1 undefined
+
+    def __len__(self):
+        return len(self.edge_id)
+
+    def polyline(self, i):
+        """Node ids of the i-th edge (not the edge id), in curve order."""
+        return self.nodes[self.offsets[i]:self.offsets[i + 1]]
+
+    def faces(self, i):
+        """Face ids beside the i-th edge."""
+        return self.face_ids[self.face_offsets[i]:self.face_offsets[i + 1]]
+
+
+class _EdgeParts:
+    """Collects EdgePolyline events (in edge id order, parts in order) into Edges."""
+
+    def __init__(self):
+        self.first, self.nodes, self.left = [], [], 0
+
+    def add(self, part):
+        if part.chunk_index == 0:
+            if self.left or (self.first and part.edge_id <= self.first[-1].edge_id):
+                raise RdmeshError(grpc.StatusCode.INTERNAL,
+                                  "edge %d arrived out of order" % part.edge_id)
+            self.first.append(part)
+            self.nodes.append([])
+            self.left = part.chunk_count
+        elif not self.left or part.edge_id != self.first[-1].edge_id:
+            raise RdmeshError(grpc.StatusCode.INTERNAL,
+                              "edge %d: part %d arrived out of order"
+                              % (part.edge_id, part.chunk_index))
+        self.nodes[-1].append(np.array(part.nodes, dtype=np.int64))
+        self.left -= 1
+
+    def result(self):
+        if self.left:
+            raise RdmeshError(grpc.StatusCode.INTERNAL, "an edge is missing parts")
+        nodes = [np.concatenate(n) if n else np.zeros(0, np.int64) for n in self.nodes]
+        counts = [len(n) for n in nodes]
+        face_counts = [len(p.faces) for p in self.first]
+        return Edges(
+            edge_id=np.array([p.edge_id for p in self.first], dtype=np.int32),
+            offsets=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+            nodes=np.concatenate(nodes) if nodes else np.zeros(0, np.int64),
+            face_offsets=np.concatenate([[0], np.cumsum(face_counts)]).astype(np.int64),
+            face_ids=np.array([f for p in self.first for f in p.faces], dtype=np.int32),
+            seam=np.array([p.seam for p in self.first], dtype=bool),
+            degenerate=np.array([p.degenerate for p in self.first], dtype=bool),
+            sharp=np.array([p.sharp for p in self.first], dtype=bool),
+            dihedral=np.array([p.dihedral for p in self.first], dtype=np.float64))
+
+
+@dataclass
 class MeshResult:
     """A finished run: per-face meshes and the assembled watertight mesh."""
     model: "pb.ModelInfo"
@@ -80,6 +146,7 @@ class MeshResult:
     triangle_face: np.ndarray  # (T,) int32 B-rep face id per triangle
     job_id: str = ""
     largest_message: int = 0  # bytes of the largest event received
+    edges: Optional[Edges] = None  # when asked for (mesh(..., edges=True))
 
     @property
     def triangle_count(self):
@@ -210,30 +277,33 @@ class Client:
         return self._with_model(
             model, lambda m: self._call(self._stub.GetModelInfo, m.ref, timeout, m.key), timeout)
 
-    def mesh_stream(self, model, uv=False, normals=False, timeout=None, **options):
+    def mesh_stream(self, model, uv=False, normals=False, timeout=None, edges=False, **options):
         """The raw Mesh call: an iterator of MeshEvent messages that also has cancel(). A local
         file is uploaded first (a stream cannot be retried after NOT_FOUND)."""
         m = self._model(model)
         if m.data is not None:
             self._upload_model(m, timeout)
-        return self._mesh_call(m, uv, normals, timeout, options)
+        return self._mesh_call(m, uv, normals, timeout, options, edges)
 
     def mesh(self, model, progress: Optional[Callable[[Progress], None]] = None, uv=False,
-             normals=False, timeout=None, **options) -> MeshResult:
+             normals=False, timeout=None, edges=False, **options) -> MeshResult:
         """Meshes a model (see info() for what `model` may be) and returns per-face numpy arrays
         plus the assembled watertight mesh. Options are those of MeshOptions:
         max_deviation, max_deviation_rel, rd_tolerance, max_triangles, min_edge_length,
-        max_edge_length, nurbs, threads, face_ids, timeout_seconds. `progress` is called with a
-        Progress as the run advances. `timeout` is the call's deadline in seconds."""
+        max_edge_length, nurbs, threads, face_ids, timeout_seconds, sharp_edge_angle.
+        `progress` is called with a Progress as the run advances. `timeout` is the call's
+        deadline in seconds. With `edges`, MeshResult.edges holds every B-rep edge as a
+        polyline over the assembled mesh's nodes (Edges)."""
         mesh_options(**options)  # unknown options fail before any call
         return self._with_model(
-            model, lambda m: self._collect(self._mesh_call(m, uv, normals, timeout, options),
-                                           progress), timeout)
+            model, lambda m: self._collect(self._mesh_call(m, uv, normals, timeout, options, edges),
+                                           progress, edges), timeout)
 
     # -- helpers ---------------------------------------------------------------------------
 
-    def _collect(self, call, progress):
+    def _collect(self, call, progress, edges=False):
         """Reads a Mesh stream into a MeshResult."""
+        edge_parts = _EdgeParts()
         started = summary = None
         parts: Dict[int, _FaceParts] = {}
         faces: Dict[int, FaceResult] = {}
@@ -266,6 +336,8 @@ class Client:
                     chunk = event.node_ids
                     ids.setdefault(chunk.face_id, []).append(
                         np.array(chunk.global_ids, dtype=np.int64))
+                elif kind == "edge":
+                    edge_parts.add(event.edge)
                 elif kind == "summary":
                     summary = event.summary
         except grpc.RpcError as error:
@@ -284,7 +356,8 @@ class Client:
         return MeshResult(model=started.model, options=started.options, summary=summary,
                           faces=ordered, xyz=xyz, triangles=triangles,
                           triangle_face=triangle_face, job_id=started.job_id,
-                          largest_message=largest)
+                          largest_message=largest,
+                          edges=edge_parts.result() if edges else None)
 
     def _metadata_for(self, key):
         return self._metadata + [(MODEL_HEADER, key)] if key else self._metadata
@@ -295,9 +368,10 @@ class Client:
         except grpc.RpcError as error:
             raise RdmeshError.wrap(error) from None
 
-    def _mesh_call(self, m, uv, normals, timeout, options):
+    def _mesh_call(self, m, uv, normals, timeout, options, edges=False):
         request = pb.MeshRequest(model=m.ref, options=mesh_options(**options),
-                                 return_fields=pb.ReturnFields(uv=uv, normals=normals))
+                                 return_fields=pb.ReturnFields(uv=uv, normals=normals,
+                                                               edges=edges))
         return self._stub.Mesh(request, timeout=timeout, metadata=self._metadata_for(m.key))
 
     def _upload(self, data, name, key, path, timeout, chunk_bytes=CHUNK_BYTES):

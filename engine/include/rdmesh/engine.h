@@ -67,8 +67,9 @@ struct WriteOptions {
   /// nodes) in its $Nodes block (MSH "parametric" nodes). Off by default: Gmsh reads both, but
   /// meshio 5 cannot read parametric nodes.
   bool msh_parametric = false;
-  /// .msh and .obj: also write every B-rep edge (MeshResult::edges, degenerate ones left out) as
-  /// line elements along its shared edge grid. The other formats ignore it.
+  /// .msh, .obj and .glb: also write every B-rep edge (MeshResult::edges, degenerate ones left
+  /// out) as line elements along its shared edge grid (.glb: LINES primitives with _EDGE_ID).
+  /// The other formats ignore it.
   bool edges = true;
 };
 
@@ -83,9 +84,9 @@ Status WriteMesh(const Model& model, const MeshResult& result, const std::string
 /// bounds a face with triangles in `mesh` (but one whose B-rep OCCT fails to query, or whose
 /// vertices have no node at all), in edge id order, built from the mesh's node
 /// classification (node_dim, node_entity, node_param), so a mesh rebuilt from a remote run gets
-/// the same lines. An edge is sharp when the dihedral angle at its midpoint exceeds
-/// `sharp_angle` (degrees). kInternal when the mesh lacks its node classification or OCCT
-/// cannot map the shape's edges to their faces.
+/// the same lines. An edge is sharp when its dihedral angle (EdgeLine::dihedral: the
+/// largest over its nodes) exceeds `sharp_angle` (degrees). kInternal when the mesh lacks its node
+/// classification or OCCT cannot map the shape's edges to their faces.
 Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mesh,
                                              double sharp_angle = kDefaultSharpEdgeAngle);
 

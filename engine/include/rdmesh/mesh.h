@@ -85,9 +85,11 @@ struct EdgeLine {
   bool degenerate = false;     ///< no extent in 3D: a pole, or an edge shorter than its tolerance
   /// Sharp: the dihedral angle exceeds the sharp angle, or the edge is free (one face, no seam).
   bool sharp = false;
-  /// Angle between the outward normals of the faces at the edge's parameter midpoint, degrees
-  /// (0 = tangent, 90 = a box's edge); the largest over pairs when more than two faces meet.
-  /// -1 when undefined: fewer than two faces, a seam, a degenerate edge or a singular normal.
+  /// Dihedral angle, degrees (0 = tangent, 90 = a box's edge): the largest, over the edge's
+  /// nodes (its vertices and edge-grid nodes, at their curve parameters), of the angle between
+  /// the faces' exact outward surface normals there (the largest over pairs when more than two
+  /// faces meet; nodes where a normal is singular are skipped). -1 when undefined: fewer than
+  /// two faces, a seam, a degenerate edge, or a singular normal at every node.
   double dihedral = -1.0;
 };
 

@@ -36,8 +36,8 @@ struct MeshOptions {
   /// Stop the run with kDeadlineExceeded after this many seconds. 0 = no limit.
   double timeout_seconds = 0.0;
   /// MeshResult::edges: an edge whose faces meet at a dihedral angle above this (degrees, in
-  /// [0, 180]) is sharp. It changes no triangle or node. (Not carried by the service, which
-  /// sends no edges: a remote result gets its edges at the default.)
+  /// [0, 180]) is sharp. It changes no triangle or node. (The service carries it as
+  /// MeshOptions.sharp_edge_angle; the CLI has no flag for it and writes the default.)
   double sharp_edge_angle = kDefaultSharpEdgeAngle;
 };
 

@@ -20,22 +20,26 @@ bool HasMesh(const MeshResult& result, int face_id) {
   return face.status == FaceStatus::kOk && face.triangle_count() > 0;
 }
 
-// `face`'s mesh in the frame and orientation of its TShape.
-Handle(Poly_Triangulation) ToTShapeFrame(const TopoDS_Face& face, const FaceMesh& mesh) {
+// `face`'s mesh in the frame and orientation of its TShape; with `uv_id` > 0, every node's
+// (u, v) is (uv_id, 0).
+Handle(Poly_Triangulation) ToTShapeFrame(const TopoDS_Face& face, const FaceMesh& mesh, int uv_id) {
   gp_Trsf to_world = face.Location().Transformation();
   gp_Trsf to_local = to_world.Inverted();
   bool mirrored = to_world.VectorialPart().Determinant() < 0.0;
   bool reversed = face.Orientation() == TopAbs_REVERSED;
   int nodes = static_cast<int>(mesh.node_count());
   int triangles = static_cast<int>(mesh.triangle_count());
-  bool has_uv = mesh.uv.size() == 2 * mesh.xyz.size() / 3;
+  bool has_uv = uv_id > 0 || mesh.uv.size() == 2 * mesh.xyz.size() / 3;
   bool has_normals = mesh.normals.size() == mesh.xyz.size();
   Handle(Poly_Triangulation) triangulation =
       new Poly_Triangulation(nodes, triangles, has_uv, has_normals);
   for (int i = 0; i < nodes; ++i) {
     gp_Pnt p(mesh.xyz[3 * i], mesh.xyz[3 * i + 1], mesh.xyz[3 * i + 2]);
     triangulation->SetNode(i + 1, p.Transformed(to_local));
-    if (has_uv) triangulation->SetUVNode(i + 1, gp_Pnt2d(mesh.uv[2 * i], mesh.uv[2 * i + 1]));
+    if (uv_id > 0)
+      triangulation->SetUVNode(i + 1, gp_Pnt2d(uv_id, 0.0));
+    else if (has_uv)
+      triangulation->SetUVNode(i + 1, gp_Pnt2d(mesh.uv[2 * i], mesh.uv[2 * i + 1]));
     if (has_normals) {
       gp_XYZ n(mesh.normals[3 * i], mesh.normals[3 * i + 1], mesh.normals[3 * i + 2]);
       n.Multiply(to_local.VectorialPart());  // no translation
@@ -55,7 +59,8 @@ Handle(Poly_Triangulation) ToTShapeFrame(const TopoDS_Face& face, const FaceMesh
 
 }  // namespace
 
-ScopedFaceTriangulations::ScopedFaceTriangulations(const Model& model, const MeshResult& result)
+ScopedFaceTriangulations::ScopedFaceTriangulations(const Model& model, const MeshResult& result,
+                                                   bool uv_face_ids)
     : lock_(LendMutex()) {
   int count = model.face_count();
   std::vector<int> source(count + 1, 0);  // representative id -> face id whose mesh it lends
@@ -72,7 +77,7 @@ ScopedFaceTriangulations::ScopedFaceTriangulations(const Model& model, const Mes
     int from = source[id];
     Handle(Poly_Triangulation) triangulation =
         from == 0 ? Handle(Poly_Triangulation)()
-                  : ToTShapeFrame(model.face(from), result.faces[from - 1]);
+                  : ToTShapeFrame(model.face(from), result.faces[from - 1], uv_face_ids ? id : 0);
     tface->Triangulation(triangulation, /*theToReset=*/true);
   }
 }

@@ -22,9 +22,11 @@ namespace rdmesh {
 /// shared Model looks unchanged afterwards.
 /// Thread-safety: holds a process-wide mutex for its lifetime, so two writers never lend at
 /// once; the meshing engine must not read face triangulations (it does not).
+/// With `uv_face_ids`, each node's (u, v) is (face id, 0) instead of the surface parameters: the
+/// id of the face that owns the TShape (the first instance), for WriteGlb to turn into _FACE_ID.
 class ScopedFaceTriangulations {
  public:
-  ScopedFaceTriangulations(const Model& model, const MeshResult& result);
+  ScopedFaceTriangulations(const Model& model, const MeshResult& result, bool uv_face_ids = false);
   ~ScopedFaceTriangulations();
   ScopedFaceTriangulations(const ScopedFaceTriangulations&) = delete;
   ScopedFaceTriangulations& operator=(const ScopedFaceTriangulations&) = delete;

@@ -77,6 +77,18 @@ void OutputFile::Int(int64_t value) {
   Text(std::string_view(text, end - text));
 }
 
+void TriangleAreaNormal(const Mesh& mesh, int64_t t, double normal[3]) {
+  const int32_t* v = &mesh.triangles[3 * t];
+  const double* a = &mesh.xyz[3 * static_cast<int64_t>(v[0])];
+  const double* b = &mesh.xyz[3 * static_cast<int64_t>(v[1])];
+  const double* c = &mesh.xyz[3 * static_cast<int64_t>(v[2])];
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  normal[0] = u[1] * w[2] - u[2] * w[1];
+  normal[1] = u[2] * w[0] - u[0] * w[2];
+  normal[2] = u[0] * w[1] - u[1] * w[0];
+}
+
 std::vector<float> NodeNormals(const MeshResult& result) {
   const Mesh& mesh = result.mesh;
   int64_t nodes = mesh.node_count();
@@ -94,13 +106,8 @@ std::vector<float> NodeNormals(const MeshResult& result) {
   }
   for (int64_t t = 0; t < mesh.triangle_count(); ++t) {
     const int32_t* v = &mesh.triangles[3 * t];
-    const double* a = &mesh.xyz[3 * v[0]];
-    const double* b = &mesh.xyz[3 * v[1]];
-    const double* c = &mesh.xyz[3 * v[2]];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                   u[0] * w[1] - u[1] * w[0]};  // twice the area, outward
+    double n[3];
+    TriangleAreaNormal(mesh, t, n);
     for (int corner = 0; corner < 3; ++corner) {
       if (has_face_normal[v[corner]]) continue;
       for (int k = 0; k < 3; ++k) sum[3 * v[corner] + k] += n[k];

@@ -52,6 +52,10 @@ class OutputFile {
   bool failed_ = false;
 };
 
+/// Triangle `t` of `mesh`: its normal scaled by twice its area, outward (corners
+/// counter-clockwise).
+void TriangleAreaNormal(const Mesh& mesh, int64_t t, double normal[3]);
+
 /// 3 floats per node of `result.mesh`: unit normals, the average of the exact surface normals of
 /// the faces that share the node (result.faces[i].normals), or of the area-weighted triangle
 /// normals where faces carry none.

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "writers/face_nodes.h"
 #include "writers/output_file.h"
 
 namespace rdmesh {
@@ -28,6 +29,10 @@ void WriteValues(const std::vector<T>& values, size_t per_line, OutputFile* out)
 Status WriteVtu(const MeshResult& result, const std::string& path) {
   const Mesh& mesh = result.mesh;
   int64_t triangles = mesh.triangle_count();
+  const FaceNodes split = SplitNodesByFace(result);
+  std::vector<double> points(3 * split.node.size());
+  for (size_t i = 0; i < split.node.size(); ++i)
+    for (int k = 0; k < 3; ++k) points[3 * i + k] = mesh.xyz[3 * split.node[i] + k];
   OutputFile out;
   Status opened = out.Open(path);
   if (!opened.ok()) return opened;
@@ -35,13 +40,15 @@ Status WriteVtu(const MeshResult& result, const std::string& path) {
       "<?xml version=\"1.0\"?>\n"
       "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
       "header_type=\"UInt64\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"");
-  out.Int(mesh.node_count());
+  out.Int(split.vertex_count());
   out.Text("\" NumberOfCells=\"");
   out.Int(triangles);
   out.Text(
       "\">\n<PointData Normals=\"Normals\">\n"
       "<DataArray type=\"Float32\" Name=\"Normals\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-  WriteValues(NodeNormals(result), 3, &out);
+  WriteValues(split.normals, 3, &out);
+  out.Text("</DataArray>\n<DataArray type=\"Int64\" Name=\"node_id\" format=\"ascii\">\n");
+  WriteValues(split.node, 16, &out);
   out.Text(
       "</DataArray>\n</PointData>\n<CellData Scalars=\"face_id\">\n"
       "<DataArray type=\"Int32\" Name=\"face_id\" format=\"ascii\">\n");
@@ -49,11 +56,11 @@ Status WriteVtu(const MeshResult& result, const std::string& path) {
   out.Text(
       "</DataArray>\n</CellData>\n<Points>\n"
       "<DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-  WriteValues(mesh.xyz, 3, &out);
+  WriteValues(points, 3, &out);
   out.Text(
       "</DataArray>\n</Points>\n<Cells>\n"
       "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-  WriteValues(mesh.triangles, 3, &out);
+  WriteValues(split.triangles, 3, &out);
   out.Text("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
   for (int64_t t = 1; t <= triangles; ++t) {
     out.Int(3 * t);

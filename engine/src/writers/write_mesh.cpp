@@ -64,7 +64,7 @@ Status Dispatch(const Model& model, const MeshResult& result, const std::vector<
   if (ext == ".obj") return WriteObj(model, result, edges, path);
   if (ext == ".ply") return WritePly(result, path);
   if (ext == ".vtu") return WriteVtu(result, path);
-  if (ext == ".glb") return WriteGlb(model, result, path);
+  if (ext == ".glb") return WriteGlb(model, result, edges, path);
   std::string supported;
   for (const std::string& format : SupportedOutputFormats())
     supported += (supported.empty() ? "" : ", ") + format;
@@ -83,7 +83,7 @@ Status WriteMesh(const Model& model, const MeshResult& result, const std::string
   Status checked = CheckMesh(model, result.mesh);
   if (!checked.ok()) return checked;
   const std::string ext = Extension(path);
-  const bool edges_wanted = options.edges && (ext == ".msh" || ext == ".obj");
+  const bool edges_wanted = options.edges && (ext == ".msh" || ext == ".obj" || ext == ".glb");
   try {
     std::vector<EdgeLine> derived;
     if (edges_wanted && result.edges.empty() && result.mesh.triangle_count() > 0) {
