@@ -64,6 +64,7 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
                                                       : nlohmann::ordered_json(nullptr)},
         {"status", FaceStatusName(face.status)},
         {"reason", face.reason},
+        {"seconds", face.seconds},
     });
   }
   nlohmann::ordered_json json = {
@@ -72,6 +73,8 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
       {"triangles", result.mesh.triangle_count()},
       {"nodes", result.mesh.node_count()},
       {"seconds", s.seconds},
+      {"edge_seconds", s.edge_seconds},
+      {"face_seconds", s.face_seconds},
       {"load_seconds", run.load_seconds},
       {"write_seconds", run.write_seconds},
       {"requested_deviation", s.requested_deviation},

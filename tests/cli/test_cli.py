@@ -13,10 +13,12 @@ MESH_OPTIONS = ["--max-deviation", "--max-deviation-rel", "--rd-tolerance", "--m
                 "--min-edge-length", "--max-edge-length", "--nurbs", "--threads", "--faces",
                 "--timeout", "--strict", "--json", "--quiet", "--output", "--edges", "--no-edges",
                 "--msh-parametric"]
-JSON_FIELDS = ["triangles", "nodes", "seconds", "load_seconds", "requested_deviation",
+JSON_FIELDS = ["triangles", "nodes", "seconds", "edge_seconds", "face_seconds", "load_seconds",
+               "requested_deviation",
                "estimated_deviation", "mesh_area", "exact_area", "faces_ok", "faces_failed",
                "output", "faces"]
-FACE_FIELDS = ["id", "surface_type", "triangles", "deviation", "area_error", "status", "reason"]
+FACE_FIELDS = ["id", "surface_type", "triangles", "deviation", "area_error", "status", "reason",
+               "seconds"]
 
 
 def gmsh_triangles(path):
@@ -156,6 +158,9 @@ def test_json_report(run, data_dir, tmp_path):
         assert field in report, field
     assert report["output"] == str(output)
     assert report["seconds"] >= 0 and report["load_seconds"] >= 0
+    # The stages' wall times lie within the run's; each face's within the face stage's.
+    assert report["edge_seconds"] + report["face_seconds"] <= report["seconds"] + 1e-6
+    assert 0 <= max(face["seconds"] for face in report["faces"]) <= report["face_seconds"] + 1e-6
     assert report["faces_ok"] == 9 and report["faces_failed"] == 0
     assert len(report["faces"]) == 9
     assert sum(face["triangles"] for face in report["faces"]) == report["triangles"]
