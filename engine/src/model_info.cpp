@@ -17,7 +17,10 @@
 #include <XCAFDoc_ShapeTool.hxx>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <set>
+#include <utility>
+#include <vector>
 
 #include "parallel.h"
 
@@ -116,30 +119,115 @@ bool ReusesBox(const Model& model, int id) {
          (placement.Form() == gp_Identity || placement.Form() == gp_Translation);
 }
 
-// The tight box of all faces (as the yardstick computes it). AddOptimal is the slow part of
-// loading: it runs on all cores, one face at a time; the reused boxes and the union follow in
-// face order.
-Bnd_Box BoundingBox(const Model& model) {
-  std::vector<Bnd_Box> face_boxes(model.face_count());
-  std::vector<int> optimal;
-  for (int id = 1; id <= model.face_count(); ++id) {
-    if (!ReusesBox(model, id)) optimal.push_back(id);
+// Surfaces whose loose box (BRepBndLib::Add: poles, analytic bounds or boundary edges, enlarged
+// by the tolerances) is known to hold the face; other types are always boxed tightly.
+bool LooseBoxHolds(const TopoDS_Face& face) {
+  switch (BRepAdaptor_Surface(face, /*restriction=*/false).GetType()) {
+    case GeomAbs_Plane:
+    case GeomAbs_Cylinder:
+    case GeomAbs_Cone:
+    case GeomAbs_Sphere:
+    case GeomAbs_Torus:
+    case GeomAbs_BezierSurface:
+    case GeomAbs_BSplineSurface:
+      return true;
+    default:
+      return false;
   }
-  ParallelRunner(0).For(
-      0, static_cast<int>(optimal.size()),
-      [&](int i) {
-        BRepBndLib::AddOptimal(model.face(optimal[i]), face_boxes[optimal[i] - 1],
-                               /*useTriangulation=*/false, /*useShapeTolerance=*/false);
-      },
-      Partition::kOnePerTask);
-  Bnd_Box all;
-  for (int id = 1; id <= model.face_count(); ++id) {
-    Bnd_Box& box = face_boxes[id - 1];
-    if (ReusesBox(model, id)) {
-      box = face_boxes[model.face_representative[id - 1] - 1].Transformed(
-          model.face_placement[id - 1]);
+}
+
+// Whether `inner`, grown by `margin`, lies inside `outer` (neither void nor open).
+bool Inside(const Bnd_Box& inner, const Bnd_Box& outer, double margin) {
+  if (inner.IsVoid() || outer.IsVoid() || inner.IsOpen() || outer.IsOpen()) return false;
+  double a[6], b[6];
+  inner.Get(a[0], a[1], a[2], a[3], a[4], a[5]);
+  outer.Get(b[0], b[1], b[2], b[3], b[4], b[5]);
+  for (int k = 0; k < 3; ++k) {
+    if (a[k] - margin < b[k] || a[k + 3] + margin > b[k + 3]) return false;
+  }
+  return true;
+}
+
+// The tight box of all faces (as the yardstick computes it): the union of every face's
+// BRepBndLib::AddOptimal box, where an instanced face placed by a translation moves its
+// representative's. AddOptimal is the slow part of loading, so it runs on all cores, and only
+// where it can change the union: first on the faces whose cheap loose box reaches furthest in
+// each of the six directions (and on every face of a type whose loose box is not known to hold
+// it), then on each face whose loose box, grown by a margin, is not inside that first union. A
+// face skipped so has its tight box inside its loose box, inside the union: the union is the
+// same as with every face boxed.
+Bnd_Box BoundingBox(const Model& model) {
+  const int nf = model.face_count();
+  std::vector<Bnd_Box> tight(nf), loose(nf);
+  std::vector<char> holds(nf, 0), computed(nf, 0);
+  std::vector<int> owners;  // faces with a box of their own
+  for (int id = 1; id <= nf; ++id) {
+    if (!ReusesBox(model, id)) owners.push_back(id);
+  }
+  const ParallelRunner runner(0);
+  runner.For(0, static_cast<int>(owners.size()), [&](int i) {
+    const int id = owners[i];
+    holds[id - 1] = LooseBoxHolds(model.face(id));
+    if (holds[id - 1]) BRepBndLib::Add(model.face(id), loose[id - 1], /*useTriangulation=*/false);
+  });
+  // The box a face contributes, loose or tight, from its own or its representative's.
+  auto moved = [&](const std::vector<Bnd_Box>& boxes, int id) {
+    if (!ReusesBox(model, id)) return boxes[id - 1];
+    return boxes[model.face_representative[id - 1] - 1].Transformed(model.face_placement[id - 1]);
+  };
+  auto owner_of = [&](int id) {
+    return ReusesBox(model, id) ? model.face_representative[id - 1] : id;
+  };
+  auto compute = [&](const std::vector<int>& wanted) {  // owners, each once
+    std::vector<int> todo;
+    for (int id : wanted) {
+      if (!computed[id - 1]) computed[id - 1] = 1, todo.push_back(id);
     }
-    all.Add(box);
+    runner.For(
+        0, static_cast<int>(todo.size()),
+        [&](int i) {
+          BRepBndLib::AddOptimal(model.face(todo[i]), tight[todo[i] - 1],
+                                 /*useTriangulation=*/false, /*useShapeTolerance=*/false);
+        },
+        Partition::kOnePerTask);
+  };
+  // Round 1: the faces of other types, and per direction the kSeeds reaching furthest.
+  constexpr int kSeeds = 4;
+  std::vector<int> first;
+  std::vector<std::pair<double, int>> reach[6];
+  for (int id = 1; id <= nf; ++id) {
+    const Bnd_Box box = moved(loose, id);
+    if (!holds[owner_of(id) - 1] || box.IsVoid() || box.IsOpen()) {
+      first.push_back(owner_of(id));
+      continue;
+    }
+    double c[6];
+    box.Get(c[0], c[1], c[2], c[3], c[4], c[5]);
+    for (int k = 0; k < 6; ++k) reach[k].push_back({k < 3 ? -c[k] : c[k], id});
+  }
+  for (auto& candidates : reach) {
+    const int n = std::min<int>(kSeeds, static_cast<int>(candidates.size()));
+    std::partial_sort(candidates.begin(), candidates.begin() + n, candidates.end(),
+                      std::greater<>());
+    for (int i = 0; i < n; ++i) first.push_back(owner_of(candidates[i].second));
+  }
+  compute(first);
+  Bnd_Box seed;
+  for (int id = 1; id <= nf; ++id) {
+    if (computed[owner_of(id) - 1]) seed.Add(moved(tight, id));
+  }
+  // Round 2: every face whose loose box is not inside the first union by a margin.
+  const double margin = seed.IsVoid() ? 0.0 : 1e-7 * std::sqrt(seed.SquareExtent());
+  std::vector<int> second;
+  for (int id = 1; id <= nf; ++id) {
+    if (!computed[owner_of(id) - 1] && !Inside(moved(loose, id), seed, margin)) {
+      second.push_back(owner_of(id));
+    }
+  }
+  compute(second);
+  Bnd_Box all;
+  for (int id = 1; id <= nf; ++id) {
+    if (computed[owner_of(id) - 1]) all.Add(moved(tight, id));
   }
   return all;
 }
