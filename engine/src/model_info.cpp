@@ -119,17 +119,17 @@ bool ReusesBox(const Model& model, int id) {
          (placement.Form() == gp_Identity || placement.Form() == gp_Translation);
 }
 
-// Surfaces whose loose box (BRepBndLib::Add: poles, analytic bounds or boundary edges, enlarged
-// by the tolerances) is known to hold the face; other types are always boxed tightly.
-bool LooseBoxHolds(const TopoDS_Face& face) {
-  switch (BRepAdaptor_Surface(face, /*restriction=*/false).GetType()) {
-    case GeomAbs_Plane:
-    case GeomAbs_Cylinder:
-    case GeomAbs_Cone:
-    case GeomAbs_Sphere:
-    case GeomAbs_Torus:
-    case GeomAbs_BezierSurface:
-    case GeomAbs_BSplineSurface:
+// Surface types whose loose box (BRepBndLib::Add: poles, analytic bounds or boundary edges,
+// enlarged by the tolerances) is known to hold the face; other types are always boxed tightly.
+bool LooseBoxHolds(SurfaceType type) {
+  switch (type) {
+    case SurfaceType::kPlane:
+    case SurfaceType::kCylinder:
+    case SurfaceType::kCone:
+    case SurfaceType::kSphere:
+    case SurfaceType::kTorus:
+    case SurfaceType::kBezier:
+    case SurfaceType::kBSpline:
       return true;
     default:
       return false;
@@ -156,7 +156,8 @@ bool Inside(const Bnd_Box& inner, const Bnd_Box& outer, double margin) {
 // it), then on each face whose loose box, grown by a margin, is not inside that first union. A
 // face skipped so has its tight box inside its loose box, inside the union: the union is the
 // same as with every face boxed.
-Bnd_Box BoundingBox(const Model& model) {
+// `types` holds each face's surface type (FaceSurfaceType).
+Bnd_Box BoundingBox(const Model& model, const std::vector<SurfaceType>& types) {
   const int nf = model.face_count();
   std::vector<Bnd_Box> tight(nf), loose(nf);
   std::vector<char> holds(nf, 0), computed(nf, 0);
@@ -167,7 +168,7 @@ Bnd_Box BoundingBox(const Model& model) {
   const ParallelRunner runner(0);
   runner.For(0, static_cast<int>(owners.size()), [&](int i) {
     const int id = owners[i];
-    holds[id - 1] = LooseBoxHolds(model.face(id));
+    holds[id - 1] = LooseBoxHolds(types[id - 1]);
     if (holds[id - 1]) BRepBndLib::Add(model.face(id), loose[id - 1], /*useTriangulation=*/false);
   });
   // The box a face contributes, loose or tight, from its own or its representative's.
@@ -255,7 +256,7 @@ ModelInfo ComputeModelInfo(const Model& model, bool bounding_box) {
   }
 
   Bnd_Box box;
-  if (bounding_box) box = BoundingBox(model);
+  if (bounding_box) box = BoundingBox(model, types);
   if (!box.IsVoid()) {
     box.Get(info.bbox[0], info.bbox[1], info.bbox[2], info.bbox[3], info.bbox[4], info.bbox[5]);
     double dx = info.bbox[3] - info.bbox[0], dy = info.bbox[4] - info.bbox[1],
