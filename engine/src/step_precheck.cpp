@@ -69,8 +69,13 @@ std::string Scan(std::string_view text, bool strings) {
   int argument = 0;
   size_t argument_start = 0;
   int depth = 0;
+  size_t comment_end = 0;  // read as code, the text before this position is a comment
   for (size_t i = 0; i < text.size(); ++i) {
     char c = text[i];
+    if (!strings && c == '/' && i >= comment_end && i + 1 < text.size() && text[i + 1] == '*') {
+      comment_end = text.find("*/", i + 2);  // read on as code, but remember where it ends
+      if (comment_end == std::string_view::npos) comment_end = text.size();
+    }
     if (strings && c == '\'') {  // a string: '' inside it reads as two strings, which is fine here
       i = text.find('\'', i + 1);
       if (i == std::string_view::npos) break;
@@ -122,8 +127,9 @@ std::string Scan(std::string_view text, bool strings) {
       size_t equals = Skip(text, digits_end, IsSpace);
       if (digits_end == i + 1 || equals >= text.size() || text[equals] != '=') continue;
       const long id = EntityId(text.substr(i + 1, digits_end - i - 1));
-      // Read as code, a comment could name an entity: duplicates count in the first pass only.
-      if (!defined.insert(id).second && strings) {
+      // A broken string can hide a definition from the first pass, so both passes count
+      // duplicates; read as code, the text of a comment is no definition.
+      if (i >= comment_end && !defined.insert(id).second) {
         return "entity #" + std::to_string(id) + " is defined more than once";
       }
       size_t keyword = Skip(text, equals + 1, IsSpace);

@@ -85,6 +85,15 @@ TEST(StepPrecheckTest, RefusesDuplicateIds) {
   EXPECT_EQ(StepCrashReason(hidden), "entity #29 is defined more than once");
   // The same text in a string or a comment is no definition.
   EXPECT_EQ(StepCrashReason(SlicedCylinder(oe29, oe29 + "/* #29=ORIENTED_EDGE */")), "");
+  EXPECT_EQ(StepCrashReason(SlicedCylinder(oe29, "/* #29=ORIENTED_EDGE */" + oe29)), "");
+  // A string left open before them hides both definitions from a scan that skips strings (the
+  // quotes pair up one off from there on): found by CI's scripts/fuzz_smoke.sh, and OCCT died on
+  // tests/data/fuzz/crash_duplicate_id_broken_string.step with SIGSEGV.
+  const std::string loop28 = "#28=EDGE_LOOP('',(#43,#44,#45,#46));";
+  std::string broken = SlicedCylinder(loop28, "#28=EDGE_LOOP(''',(#43,#44,#45,#46));");
+  broken.replace(broken.find(oe29), oe29.size(),
+                 "#29=ORIENTED_EDGE('',*,*,#30,.T.);\n#30=ORIENTED_EDGE('',*,*,#29,.F.);\n" + oe29);
+  EXPECT_EQ(StepCrashReason(broken), "entity #29 is defined more than once");
 }
 
 TEST(StepPrecheckTest, RefusesAbsurdNesting) {
