@@ -3,13 +3,15 @@
 issue 12: the daemon never restarts or drops a connection, every request ends with OK or a
 documented status, and the well-formed jobs all complete byte-identical to the local CLI.
 
-    /usr/bin/python3 bench/fuzz_daemon.py [-n 10000] [--seed 1] [--clients 8]
+    /usr/bin/python3 bench/fuzz_daemon.py [-n 10000] [--seed 1] [--jobs 3] [--timeout 10]
+                                          [--clients 8] [--client-pause 5]
                                           [--rdmeshd build/bin/rdmeshd] [--cli build/bin/rdmesh]
 
-Starts rdmeshd on loopback, runs `bench/fuzz_mutants.py -n N --daemon ADDRESS --no-cli` (one
-mutant at a time: upload and mesh at 1e-3 of the diagonal), and meanwhile --clients threads that
-each loop `rdmesh mesh MODEL -o OUT.msh --remote ADDRESS` over the bundled models and compare the
-file with a local `rdmesh mesh MODEL -o REF.msh` byte for byte. At the end it reports the
+Starts rdmeshd on loopback, runs `bench/fuzz_mutants.py -n N --daemon ADDRESS --no-cli --jobs J`
+(J mutants in flight: each an upload and a mesh at 1e-3 of the diagonal with `timeout_seconds`
+--timeout), and meanwhile --clients threads that each loop `rdmesh mesh MODEL -o OUT.msh --remote
+ADDRESS` over the bundled models, --client-pause seconds apart, and compare the file with a local
+`rdmesh mesh MODEL -o REF.msh` byte for byte. fuzz_mutants.py's progress lines go to stderr. At the end it reports the
 mutants' outcomes (fuzz_mutants.py's summary), the well-formed jobs (done, identical, differing,
 failed), whether the daemon is the same process as at the start, and its worker counts.
 """
@@ -36,7 +38,12 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("-n", "--count", type=int, default=10000)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--jobs", type=int, default=3, help="mutants in flight (default 3)")
+    parser.add_argument("--timeout", type=float, default=10,
+                        help="timeout_seconds of each mutant's calls (default 10)")
     parser.add_argument("--clients", type=int, default=8)
+    parser.add_argument("--client-pause", type=float, default=5,
+                        help="seconds each well-formed client waits between its jobs (default 5)")
     parser.add_argument("--rdmeshd", default=str(ROOT / "build" / "bin" / "rdmeshd"))
     parser.add_argument("--cli", default=str(ROOT / "build" / "bin" / "rdmesh"))
     args = parser.parse_args()
@@ -83,6 +90,7 @@ def main():
                 outcome = "differs (%s)" % model.name
             with lock:
                 tally[outcome] += 1
+            stop.wait(args.client_pause)
 
     threads = [threading.Thread(target=well_formed, args=(i,)) for i in range(args.clients)]
     for thread in threads:
@@ -90,13 +98,12 @@ def main():
     start = time.monotonic()
     fuzz = subprocess.run([sys.executable, str(ROOT / "bench" / "fuzz_mutants.py"), "-n",
                            str(args.count), "--seed", str(args.seed), "--daemon", address,
-                           "--no-cli"], capture_output=True, text=True)
+                           "--no-cli", "--jobs", str(args.jobs), "--timeout", str(args.timeout),
+                           "--progress", "500"], stdout=subprocess.PIPE, text=True)
     stop.set()
     for thread in threads:
         thread.join()
     print(fuzz.stdout[-4000:])
-    if fuzz.stderr.strip():
-        print("fuzz_mutants.py stderr:", fuzz.stderr[-2000:])
     alive = daemon.poll() is None
     status = Client(address).server_status() if alive else None
     print("%.0f s; well-formed jobs beside them (%d clients): %s" % (

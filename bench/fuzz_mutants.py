@@ -26,6 +26,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -178,18 +179,19 @@ MUTATORS = [flip_bytes, truncate, drop_lines, duplicate_lines, reference_other, 
 
 
 def make_mutants(seeds, count, rng):
-    """[(name, bytes, mutator name)] of `count` mutants, round robin over seeds and mutators."""
+    """Yields `count` mutants (name, bytes, mutator name), round robin over seeds and mutators.
+    A generator, so that 10,000 mutants are never all in memory; the order depends on the seed
+    only."""
     sources = [(p.stem, p.read_bytes()) for p in seeds]
-    mutants = []
-    while len(mutants) < count:
+    made = 0
+    while made < count:
         stem, text = rng.choice(sources)
-        mutator = MUTATORS[len(mutants) % len(MUTATORS)]
+        mutator = MUTATORS[made % len(MUTATORS)]
         mutant = mutator(rng, text)
         if mutant is None or mutant == text:
             continue
-        mutants.append(("%04d_%s_%s.step" % (len(mutants), mutator.__name__, stem), mutant,
-                        mutator.__name__))
-    return mutants
+        yield ("%05d_%s_%s.step" % (made, mutator.__name__, stem), mutant, mutator.__name__)
+        made += 1
 
 
 def signal_name(number):
@@ -232,6 +234,7 @@ class Daemon:
         self.process = None
         self.address = address if address != "start" else None
         self.deaths = 0
+        self.lock = threading.Lock()  # one restart at a time with --jobs > 1
         if self.address is None:
             self.start()
 
@@ -254,12 +257,13 @@ class Daemon:
     def died(self):
         """How the daemon this script runs died ("exit N" or "SIGxxx"), then starts a fresh one;
         None while it lives."""
-        if self.process is None or self.process.poll() is None:
-            return None
-        code = self.process.returncode
-        self.deaths += 1
-        self.start()
-        return signal_name(-code) if code < 0 else "exit %d" % code
+        with self.lock:
+            if self.process is None or self.process.poll() is None:
+                return None
+            code = self.process.returncode
+            self.deaths += 1
+            self.start()
+            return signal_name(-code) if code < 0 else "exit %d" % code
 
     def stop(self):
         if self.process is not None and self.process.poll() is None:
@@ -274,8 +278,9 @@ class Daemon:
         """After a hang: a daemon this script runs is stopped and started afresh (a stuck reader
         holds OCCT's reader lock for good, so every later request would wait too)."""
         if self.process is not None:
-            self.stop()
-            self.start()
+            with self.lock:
+                self.stop()
+                self.start()
 
 
 def run_daemon(daemon, path, timeout):
@@ -316,6 +321,11 @@ def main():
     parser.add_argument("--keep", type=pathlib.Path,
                         help="keep the crashing and hanging mutants in this directory")
     parser.add_argument("--verbose", action="store_true", help="one line per mutant")
+    parser.add_argument("--jobs", type=int, default=1,
+                        help="mutants in flight at once (default 1); the mutants and their "
+                        "order are the same whatever the number")
+    parser.add_argument("--progress", type=int, default=0, metavar="N",
+                        help="a progress line on stderr every N mutants")
     args = parser.parse_args()
 
     rng = random.Random(args.seed)
@@ -329,38 +339,63 @@ def main():
     tally = {"cli": collections.Counter(), "daemon": collections.Counter()}
     by_mutator = collections.defaultdict(collections.Counter)
     bad = []  # (channel, outcome, name)
+    lock = threading.Lock()  # guards the generator and the tallies
+    done = [0]
     started = time.monotonic()
+
+    def run_one(tmp, name, data, mutator):
+        path = tmp / name
+        path.write_bytes(data)
+        results = []
+        if not args.no_cli:
+            results.append(("cli",) + run_cli(args.cli, path, path.with_suffix(".msh"),
+                                              args.timeout, env))
+        if daemon:
+            results.append(("daemon",) + run_daemon(daemon, path, args.timeout))
+        path.unlink()
+        path.with_suffix(".msh").unlink(missing_ok=True)
+        with lock:
+            for channel, outcome, seconds, note in results:
+                tally[channel][outcome] += 1
+                by_mutator[mutator][channel + " " + outcome] += 1
+                failed = outcome.startswith("crash") or outcome in ("hang", "daemon died")
+                if failed or note:
+                    bad.append((channel, outcome + (" (%s)" % note if note else ""), name))
+                    if args.keep and failed:
+                        args.keep.mkdir(parents=True, exist_ok=True)
+                        (args.keep / name).write_bytes(data)
+                if args.verbose:
+                    print("%-6s %-16s %6.1f s  %s %s" % (channel, outcome, seconds, name, note),
+                          flush=True)
+            done[0] += 1
+            if args.progress and done[0] % args.progress == 0:
+                print("progress: %d of %d mutants, %.0f s, %s" % (
+                    done[0], args.count, time.monotonic() - started,
+                    "; ".join("%s %s" % (c, dict(t)) for c, t in tally.items() if t)),
+                    file=sys.stderr, flush=True)
+
+    def stream(tmp):
+        while True:
+            with lock:
+                mutant = next(mutants, None)
+            if mutant is None:
+                return
+            run_one(tmp, *mutant)
+
     try:
         with tempfile.TemporaryDirectory(prefix="rdmesh_mutants_") as tmp:
             tmp = pathlib.Path(tmp)
-            for name, data, mutator in mutants:
-                path = tmp / name
-                path.write_bytes(data)
-                results = []
-                if not args.no_cli:
-                    results.append(("cli",) + run_cli(args.cli, path, tmp / "out.msh",
-                                                      args.timeout, env))
-                if daemon:
-                    results.append(("daemon",) + run_daemon(daemon, path, args.timeout))
-                for channel, outcome, seconds, note in results:
-                    tally[channel][outcome] += 1
-                    by_mutator[mutator][channel + " " + outcome] += 1
-                    failed = outcome.startswith("crash") or outcome in ("hang", "daemon died")
-                    if failed or note:
-                        bad.append((channel, outcome + (" (%s)" % note if note else ""), name))
-                        if args.keep and failed:
-                            args.keep.mkdir(parents=True, exist_ok=True)
-                            (args.keep / name).write_bytes(data)
-                    if args.verbose:
-                        print("%-6s %-16s %6.1f s  %s %s" % (channel, outcome, seconds, name,
-                                                             note), flush=True)
-                path.unlink()
+            threads = [threading.Thread(target=stream, args=(tmp,)) for _ in range(args.jobs)]
+            for thread in threads:
+                thread.start()
+            for thread in threads:
+                thread.join()
     finally:
         if daemon:
             daemon.stop()
 
-    print("%d mutants of %d seed files, seed %d, --timeout %g s, %.0f s in all%s"
-          % (len(mutants), len(seeds), args.seed, args.timeout, time.monotonic() - started,
+    print("%d mutants of %d seed files, seed %d, --timeout %g s, %d streams, %.0f s in all%s"
+          % (done[0], len(seeds), args.seed, args.timeout, args.jobs, time.monotonic() - started,
              " (RDMESH_NO_FORK=1)" if args.no_fork else ""))
     for channel, counts in tally.items():
         if counts:
