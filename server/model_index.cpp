@@ -1,15 +1,13 @@
 #include "model_index.h"
 
-#include <fcntl.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <utility>
 
 #include "convert.h"
 #include "model_cache.h"
+#include "rdmesh/atomic_file.h"
 #include "rdmesh/sha256.h"
 
 namespace rdmesh::server {
@@ -52,23 +50,10 @@ std::shared_ptr<const StoredModel> ModelIndex::Find(const std::string& id) {
 Result<std::string> ModelIndex::Spool(const std::string& id, const std::string& bytes,
                                       ModelFormat format) {
   const std::string path = spool_dir_ + "/" + id + Extension(format);
-  const std::string partial = path + ".part";
-  const int fd = open(partial.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  bool ok = fd >= 0;
-  std::size_t written = 0;
-  while (ok && written < bytes.size()) {
-    const ssize_t n = write(fd, bytes.data() + written, bytes.size() - written);
-    if (n < 0 && errno == EINTR) continue;
-    ok = n > 0;
-    if (ok) written += static_cast<std::size_t>(n);
-  }
-  const int error = errno;
-  if (fd >= 0) ok = close(fd) == 0 && ok;
-  if (ok) ok = std::rename(partial.c_str(), path.c_str()) == 0;
-  if (!ok) {
-    unlink(partial.c_str());
+  Status written = WriteFileAtomically(path, path + ".part", bytes, 0600, /*durable=*/false);
+  if (!written.ok()) {
     return Status(StatusCode::kIoError, "cannot store the model in the server's spool directory " +
-                                            spool_dir_ + ": " + std::strerror(error));
+                                            spool_dir_ + ": " + written.message());
   }
   return path;
 }

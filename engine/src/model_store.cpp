@@ -6,7 +6,6 @@
 
 #include <Standard_Version.hxx>
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -19,6 +18,7 @@
 #include "model.h"
 #include "model_payload.h"
 #include "model_readers.h"
+#include "rdmesh/atomic_file.h"
 #include "rdmesh/sha256.h"
 
 namespace rdmesh {
@@ -89,32 +89,6 @@ bool DecodeDerived(const std::string& bytes, DerivedValues* derived) {
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same directory, fsync, rename.
-Status WriteAtomically(const std::string& path, const std::string& bytes) {
-  const std::string partial = path + ".tmp." + std::to_string(getpid()) + "." +
-                              std::to_string(reinterpret_cast<uintptr_t>(&bytes));
-  const int fd = open(partial.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  bool ok = fd >= 0;
-  std::size_t written = 0;
-  while (ok && written < bytes.size()) {
-    const ssize_t n = write(fd, bytes.data() + written, bytes.size() - written);
-    if (n < 0 && errno == EINTR) continue;
-    ok = n > 0;
-    if (ok) written += static_cast<std::size_t>(n);
-  }
-  const int error = errno;
-  if (fd >= 0) {
-    ok = ok && fsync(fd) == 0;
-    ok = close(fd) == 0 && ok;
-  }
-  if (ok) ok = std::rename(partial.c_str(), path.c_str()) == 0;
-  if (!ok) {
-    unlink(partial.c_str());
-    return Status(StatusCode::kIoError,
-                  "cannot write the parsed model " + path + ": " + std::strerror(error));
-  }
-  return Status::Ok();
-}
-
 /// The format LoadModelFromBytes reads `bytes` as: `format`, else `name`'s extension, else the
 /// content; kAuto when none fits.
 ModelFormat ResolveFormat(ModelFormat format, const std::string& name, const std::string& bytes) {
@@ -259,8 +233,14 @@ Status ModelStore::Save(const std::string& key, const CanonicalModel& model) con
         << "\nlength_unit=" << info.length_unit << "\nunit_scale_mm=" << scale
         << "\npayload=" << PayloadKindName(model.kind) << "\npayload_bytes=" << model.payload.size()
         << "\nderived_bytes=" << derived.size() << "\nbody_fnv1a64=" << checksum << "\n\n";
-  Status written = WriteAtomically(PathOf(key), entry.str() + body);
-  if (!written.ok()) return written;
+  const std::string path = PathOf(key);
+  const std::string partial = path + ".tmp." + std::to_string(getpid()) + "." +
+                              std::to_string(reinterpret_cast<uintptr_t>(&body));
+  Status written = WriteFileAtomically(path, partial, entry.str() + body, 0644, /*durable=*/true);
+  if (!written.ok()) {
+    return Status(StatusCode::kIoError,
+                  "cannot write the parsed model " + path + ": " + written.message());
+  }
   Evict(key);
   return Status::Ok();
 }
