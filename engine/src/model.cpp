@@ -105,6 +105,27 @@ DerivedValues DerivedValuesOf(const Model& model) {
   return derived;
 }
 
+namespace {
+
+// The last line of `message` that says something, without OCCT's address prefix.
+std::string InnermostReason(const std::string& message) {
+  // OCCT's nested exceptions print one per line, innermost last, as "0xADDRESS : Type: text".
+  std::string last;
+  std::size_t start = 0;
+  while (start < message.size()) {
+    std::size_t end = message.find('\n', start);
+    if (end == std::string::npos) end = message.size();
+    std::string line = message.substr(start, end - start);
+    if (line.compare(0, 2, "0x") == 0 && line.find(" : ") != std::string::npos)
+      line = line.substr(line.find(" : ") + 3);
+    if (line.find_first_not_of(" \t)") != std::string::npos) last = line;
+    start = end + 1;
+  }
+  return last;
+}
+
+}  // namespace
+
 Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
                                                 const std::string& name,
                                                 const std::string& display_name,
@@ -176,8 +197,13 @@ Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat form
   if (context != nullptr && context->ShouldStop()) return context->StopStatus();
   Result<ReadShape> reread = ReadPayload(*payload, kind);
   if (!reread.ok()) {
-    return Status(StatusCode::kInternal,
-                  "cannot read '" + name + "': its own payload: " + reread.status().message());
+    // Seen on fuzzed files with absurd numbers: OCCT transfers them, but a degenerate value
+    // (a zero-length direction) does not read back from OCCT's own binary format.
+    return Status(StatusCode::kParseError,
+                  "cannot read '" + name +
+                      "': OCCT cannot store and read back its geometry, which holds degenerate "
+                      "or out-of-range values (" +
+                      InnermostReason(reread.status().message()) + ")");
   }
   reread->length_unit = read->length_unit;
   reread->unit_scale_mm = read->unit_scale_mm;

@@ -2,6 +2,7 @@
 hangs OCCT, or a job that passes a limit, costs its own call and one worker, never the daemon."""
 
 import os
+import re
 import signal
 import threading
 import time
@@ -232,3 +233,26 @@ def test_memory_limit_fails_the_call_not_the_daemon(start_daemon):
             "CPU time limit of 10 s" in error.value.details)
     assert daemon.alive()
     assert client.health() == "SERVING"
+
+
+def test_fuzz_regressions_end_as_documented_in_one_daemon(start_daemon):
+    """Every file of tests/data/fuzz through one daemon: the status matches the CLI's documented
+    exit code (3: the upload fails, 1: the mesh call fails, 4: the deadline), with the same
+    message, and the daemon serves a well-formed model at the end."""
+    table = (DATA / "fuzz" / "README.md").read_text()
+    cases = re.findall(r"^\| `(\w+\.step)` \|.*\| ([134]) \| ([^|]+?) \|$", table, re.M)
+    assert len(cases) == len(list((DATA / "fuzz").glob("*.step")))
+    daemon = start_daemon()
+    client = daemon.client()
+    for name, exit_code, message in cases:
+        with pytest.raises(RdmeshError) as error:
+            info = client.upload(DATA / "fuzz" / name)
+            assert exit_code != "3", name
+            client.mesh(info, timeout_seconds=2)
+        expected = grpc.StatusCode.DEADLINE_EXCEEDED if exit_code == "4" else \
+            grpc.StatusCode.INVALID_ARGUMENT
+        assert error.value.code == expected, (name, error.value.details)
+        if exit_code != "4":
+            assert message in error.value.details, name
+    assert daemon.alive()
+    assert client.mesh(CUBE).summary.faces_ok == 9
