@@ -116,6 +116,16 @@ def main():
                          status.refused_models if status else "-"))
     daemon.terminate()
     daemon.wait()
+    # The daemon's own view of how long each call ran ("req=... ok in S s" / "failed in S s"): a
+    # call whose work went on after its deadline would show here, not in the client's outcome.
+    seconds = [float(m) for m in re.findall(r"req=\w+ (?:ok|failed) in ([0-9.]+) s",
+                                              log_path.read_text())]
+    longest_deadline = args.timeout + 30  # fuzz_mutants.py's call deadline (HANG_GRACE)
+    over = [s for s in seconds if s > longest_deadline + 2]
+    print("daemon log: %d calls ended, the longest after %.1f s; %d ran more than 2 s past the "
+          "longest call deadline (%g s)%s" % (
+              len(seconds), max(seconds, default=0), len(over), longest_deadline,
+              ": " + ", ".join("%.1f s" % s for s in sorted(over)[-10:]) if over else ""))
 
 
 if __name__ == "__main__":
