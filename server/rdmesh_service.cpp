@@ -41,6 +41,7 @@ pb::ModelInfo Describe(const StoredModel& model, bool cached) {
   info.set_file_bytes(model.file_bytes);
   info.set_cached(cached);
   info.set_load_seconds(cached ? 0.0 : model.load_seconds);
+  if (cached) info.set_from_store(false);
   return info;
 }
 
@@ -376,6 +377,7 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
           *started->mutable_model() = Describe(model, true);
           started->mutable_model()->set_cached(reply.ready().model().cached());
           started->mutable_model()->set_load_seconds(reply.ready().model().load_seconds());
+          started->mutable_model()->set_from_store(reply.ready().model().from_store());
           pb::ResolvedOptions* resolved = started->mutable_options();
           *resolved->mutable_options() = ToProto(*options);
           resolved->set_max_deviation_abs(options->max_deviation > 0

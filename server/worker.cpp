@@ -82,6 +82,7 @@ pb::ModelInfo Describe(const CachedModel& entry, bool cached) {
   info.set_file_bytes(entry.file_bytes);
   info.set_cached(cached);
   info.set_load_seconds(cached ? 0.0 : entry.load_seconds);
+  info.set_from_store(!cached && entry.from_store);
   return info;
 }
 

@@ -19,7 +19,7 @@ def test_second_daemon_reads_the_store(start_daemon, tmp_path):
     store = tmp_path / "store"
     first = start_daemon("--cache-dir", str(store))
     uploaded = first.client().upload(EIGHT_CYL)
-    assert not uploaded.cached
+    assert not uploaded.cached and not uploaded.from_store
     first_mesh = _mesh_remote(first, EIGHT_CYL, tmp_path / "first.msh")
     assert "read from the store" not in first.log()
     assert "'%s' parsed in" % EIGHT_CYL.name in first.log()
@@ -32,9 +32,11 @@ def test_second_daemon_reads_the_store(start_daemon, tmp_path):
     again = second.client().upload(EIGHT_CYL)
     assert again.model_id == uploaded.model_id
     assert not again.cached  # not in this daemon's memory...
+    assert again.from_store
     assert "'%s' read from the store in" % EIGHT_CYL.name in second.log()  # ...nor parsed
     assert "'%s' parsed in" % EIGHT_CYL.name not in second.log()
     assert again.faces == uploaded.faces and list(again.bbox) == list(uploaded.bbox)
+    assert not second.client().upload(EIGHT_CYL).from_store  # now cached: no load at all
     assert _mesh_remote(second, EIGHT_CYL, tmp_path / "second.msh") == first_mesh
 
 
