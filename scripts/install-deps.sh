@@ -31,9 +31,10 @@ build_pkgs=(
   # The bounded libFuzzer run of scripts/test.sh (scripts/fuzz_smoke.sh): clang and its runtimes,
   # gdb to read where a crash inside OCCT happened.
   clang libclang-rt-14-dev gdb
-  # Test-time imports and programs (tests/cli, tests/python; nginx for test_routing.py, the
+  # Test-time imports and programs (tests/cli, tests/python; python3-yaml reads docker/ and
+  # deploy/ in test_deploy_env.py; nginx for test_routing.py, the
   # gRPC balancer in front of several rdmeshd, run as the current user).
-  python3-gmsh openssl nginx
+  python3-gmsh python3-yaml openssl nginx
 )
 # Programs the tests need that may come from elsewhere: the machine's own Node.js build ships
 # npm and conflicts with Debian's npm package, so these are installed only when the command is
