@@ -29,8 +29,9 @@ class MeshJob {
     MeshOptions options;                       ///< validated, threads resolved
     bool with_uv = false;
     bool with_normals = false;
-    bool with_topology = false;  ///< FaceNodeIds carry node_dim, node_entity and node_param
-    bool with_edges = false;     ///< EdgePolyline events (MeshResult::edges) before the Summary
+    bool with_topology = false;   ///< FaceNodeIds carry node_dim, node_entity and node_param
+    bool with_edges = false;      ///< EdgePolyline events (MeshResult::edges) before the Summary
+    bool with_deviation = false;  ///< FaceMesh.triangle_deviation
     /// The server's --max-triangles: the run is stopped (RESOURCE_EXHAUSTED) when the faces
     /// streamed so far pass it. 0 = no limit.
     int64_t max_triangles = 0;
