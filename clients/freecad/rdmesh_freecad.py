@@ -191,3 +191,44 @@ def run(doc=None, selection=None, address=None, max_deviation=None, max_deviatio
             client.close()
     doc.recompute()
     return done
+
+
+def _ask(address, deviation_rel):
+    """Address and relative deviation from two dialogs; None when cancelled."""
+    from PySide import QtGui
+    address, ok = QtGui.QInputDialog.getText(None, "rdmesh", "rdmeshd address (host:port):",
+                                             text=address)
+    if not ok:
+        return None
+    deviation_rel, ok = QtGui.QInputDialog.getDouble(
+        None, "rdmesh", "Max deviation (fraction of each shape's bounding-box diagonal):",
+        deviation_rel, 1e-7, 0.5, 7)
+    if not ok:
+        return None
+    return address, deviation_rel
+
+
+def main():
+    """The macro and the workbench command: in the GUI, asks for the address and deviation
+    (remembered as preferences) and meshes the selection (or every visible shape); in FreeCADCmd,
+    meshes every visible shape of the active document with the preferences."""
+    import FreeCAD
+    address, deviation_rel = settings()
+    selection = None
+    if FreeCAD.GuiUp:
+        import FreeCADGui
+        selection = FreeCADGui.Selection.getSelection()
+        answer = _ask(address, deviation_rel)
+        if answer is None:
+            return None
+        address, deviation_rel = answer
+        save_settings(address, deviation_rel)
+    try:
+        return run(selection=selection, address=address, max_deviation_rel=deviation_rel,
+                   report=lambda line: FreeCAD.Console.PrintMessage(line + "\n"))
+    except Exception as error:  # noqa: BLE001 - shown to the user
+        FreeCAD.Console.PrintError("rdmesh: %s\n" % error)
+        if FreeCAD.GuiUp:
+            from PySide import QtGui
+            QtGui.QMessageBox.warning(None, "rdmesh", str(error))
+        return None

@@ -35,10 +35,15 @@ try:
     doc.recompute()
     hidden.Visibility = False
 
-    done = rdmesh_freecad.run(doc, address=os.environ["RDMESH_ADDRESS"],
-                              max_deviation_rel=float(os.environ["RDMESH_FC_DEVIATION_REL"]))
+    # The macro itself, as FreeCAD runs it, on the preferences it reads (the address comes from
+    # RDMESH_ADDRESS, which wins over the preference).
+    rdmesh_freecad.save_settings("127.0.0.1:1", float(os.environ["RDMESH_FC_DEVIATION_REL"]))
+    macro = os.path.join(os.environ["RDMESH_FREECAD_DIR"], "RdmeshMesh.FCMacro")
+    with open(macro) as file:
+        exec(compile(file.read(), macro, "exec"), {"__file__": macro, "__name__": "__main__"})
+    done = [(o.RdmeshSource, o) for o in doc.Objects if hasattr(o, "RdmeshSource")]
     report = {"meshes": []}
-    for source, feature, result in done:
+    for source, feature in done:
         brep_path = os.path.join(work, source.Name + ".brep")
         with open(brep_path, "wb") as file:
             file.write(rdmesh_freecad.shape_brep(source))
@@ -67,9 +72,8 @@ try:
         report["meshes"].append({
             "source": source.Name, "brep": brep_path, "faces": len(placed.Faces),
             "facets": mesh.CountFacets, "points": mesh.CountPoints,
-            "triangles_sent": int(len(result.triangles)),
-            "facets_in_order": [list(f) for f in mesh.Topology[1]] ==
-                               [list(map(int, t)) for t in result.triangles],
+            "facet_list": [list(f) for f in mesh.Topology[1]],
+            "point_list": [[p.x, p.y, p.z] for p in mesh.Topology[0]],
             "is_solid": mesh.isSolid(), "non_manifolds": mesh.hasNonManifolds(),
             "open_edges": sum(1 for n in uses.values() if n == 1),
             "overused_edges": sum(1 for n in uses.values() if n > 2),
@@ -81,7 +85,7 @@ try:
             "requested_deviation": feature.RdmeshRequestedDeviation,
             "largest_facet_deviation": max(feature.RdmeshDeviation),
         })
-    report["meshed_sources"] = [s.Name for s, _, _ in done]
+    report["meshed_sources"] = [s.Name for s, _ in done]
     # The face groups survive saving: FreeCAD drops the segments, RdmeshFaceIds restores them.
     saved = os.path.join(work, "meshed.FCStd")
     doc.saveAs(saved)
