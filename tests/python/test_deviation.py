@@ -64,8 +64,9 @@ def png_size(path):
     return struct.unpack(">II", data[16:24])
 
 
-def test_view_draws_the_deviation_with_colour_bar_and_worst_faces(tmp_path):
-    mesh_path, picture = tmp_path / "nist.vtu", tmp_path / "nist.png"
+@pytest.mark.parametrize("ext", [".vtu", ".ply"])
+def test_view_draws_the_deviation_with_colour_bar_and_worst_faces(tmp_path, ext):
+    mesh_path, picture = tmp_path / ("nist" + ext), tmp_path / "nist.png"
     run([CLI, "mesh", str(NIST), "-o", str(mesh_path), "-q", "--max-deviation-rel", "2e-3"])
     shown = json.loads(run(["/usr/bin/python3", str(RDMESH_PY), "view", str(mesh_path), "-o",
                             str(picture), "--size", "640x480", "--labels", "4",
