@@ -7,10 +7,11 @@
 #   scripts/install-deps.sh --bench    also the benchmark peers (the gmsh program)
 #
 # The default set holds everything that scripts/test.sh builds, imports or runs: the Python
-# modules the pytest suites import (gmsh, meshio, numpy, grpc, protobuf), the programs they call
-# (openssl, nginx, protoc with the Python gRPC plugin, node and npm for the glTF validator and
-# three.js, whose npm packages tests/cli installs under the build tree on first use) and the
-# sanitizer runtimes of the ASan/UBSan and TSan builds (gcc's, pulled in by build-essential).
+# modules the pytest suites import (gmsh, meshio, numpy, grpc, protobuf, matplotlib), the programs
+# they call (openssl, nginx, protoc with the Python gRPC plugin, FreeCAD's freecadcmd, node and
+# npm for the glTF validator and three.js, whose npm packages tests/cli installs under the build
+# tree on first use) and the sanitizer runtimes of the ASan/UBSan and TSan builds (gcc's, pulled
+# in by build-essential).
 set -euo pipefail
 
 mode=${1:-build}
@@ -35,6 +36,9 @@ build_pkgs=(
   # deploy/ in test_deploy_env.py; nginx for test_routing.py, the
   # gRPC balancer in front of several rdmeshd, run as the current user).
   python3-gmsh python3-yaml openssl nginx
+  # rdmesh-py view draws with matplotlib (Agg, no display); tests/python/test_freecad.py runs
+  # the FreeCAD client (clients/freecad) in Debian's FreeCAD 0.20 (freecadcmd, headless).
+  python3-matplotlib freecad
 )
 # Programs the tests need that may come from elsewhere: the machine's own Node.js build ships
 # npm and conflicts with Debian's npm package, so these are installed only when the command is

@@ -274,16 +274,18 @@ MeshSummary FromProto(const pb::Summary& in) {
 }
 
 std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool with_normals,
-                                        std::size_t max_bytes) {
+                                        std::size_t max_bytes, bool with_deviation) {
   const int64_t nodes = face.node_count();
   const int64_t triangles = face.triangle_count();
   with_uv = with_uv && face.uv.size() == static_cast<std::size_t>(2 * nodes);
   with_normals = with_normals && face.normals.size() == static_cast<std::size_t>(3 * nodes);
+  with_deviation =
+      with_deviation && face.triangle_deviation.size() == static_cast<std::size_t>(triangles);
 
   // Upper bounds of the encoded size: doubles are 8 bytes and a non-negative int32 varint at
   // most 5. The fixed fields, the reason and the MeshEvent wrapper fit in the reserve.
   const std::size_t node_bytes = 24 + (with_uv ? 16 : 0) + (with_normals ? 24 : 0);
-  const std::size_t triangle_bytes = 15;
+  const std::size_t triangle_bytes = 15 + (with_deviation ? 8 : 0);
   const std::size_t reserve = 512 + face.reason.size();
   const std::size_t budget =
       max_bytes > reserve + node_bytes ? max_bytes - reserve : node_bytes;  // always progress
@@ -318,6 +320,10 @@ std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool
     if (with_uv) AppendRange(face.uv, 2 * node, 2 * node_end, part.mutable_uv());
     if (with_normals) AppendRange(face.normals, 3 * node, 3 * node_end, part.mutable_normals());
     AppendRange(face.triangles, 3 * triangle, 3 * triangle_end, part.mutable_triangles());
+    if (with_deviation) {
+      AppendRange(face.triangle_deviation, triangle, triangle_end,
+                  part.mutable_triangle_deviation());
+    }
     parts.push_back(std::move(part));
     node = node_end;
     triangle = triangle_end;
@@ -452,6 +458,7 @@ Status MeshResultBuilder::AddFace(const pb::FaceMesh& part) {
   AppendField(part.uv(), &face.uv);
   AppendField(part.normals(), &face.normals);
   AppendField(part.triangles(), &face.triangles);
+  AppendField(part.triangle_deviation(), &face.triangle_deviation);
   ++entry.next_chunk;
   if (entry.next_chunk == entry.chunk_count &&
       (face.node_count() != part.node_count() || face.triangle_count() != part.triangle_count())) {
@@ -534,6 +541,13 @@ Result<MeshResult> MeshResultBuilder::Finish() {
       topology = false;
     }
   }
+  // Per-triangle deviations when every face came with them (ReturnFields.triangle_deviation).
+  bool deviation = true;
+  for (const PendingFace& entry : faces_) {
+    if (entry.face.status == FaceStatus::kOk &&
+        entry.face.triangle_deviation.size() != static_cast<size_t>(entry.face.triangle_count()))
+      deviation = false;
+  }
   if (topology) {
     mesh.node_dim.assign(nodes, 0);
     mesh.node_entity.assign(nodes, 0);
@@ -576,6 +590,7 @@ Result<MeshResult> MeshResultBuilder::Finish() {
       mesh.triangles.insert(mesh.triangles.end(), {static_cast<int32_t>(a), static_cast<int32_t>(b),
                                                    static_cast<int32_t>(c)});
       mesh.triangle_face.push_back(id);
+      if (deviation) mesh.triangle_deviation.push_back(face.triangle_deviation[k / 3]);
     }
   }
   if (edge_parts_left_ != 0) return Invalid("an EdgePolyline is missing parts");

@@ -49,9 +49,11 @@ MeshSummary FromProto(const pb::Summary& in);
 
 /// Splits one face into FaceMesh events whose serialized size (inside a MeshEvent) is at most
 /// `max_bytes` each; at least one event, even for a face without nodes. uv and normals are
-/// included when asked for and present. Global ids are not: see SplitFaceNodeIds.
+/// included when asked for and present, and so is triangle_deviation with `with_deviation`.
+/// Global ids are not: see SplitFaceNodeIds.
 std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool with_normals,
-                                        std::size_t max_bytes = kMaxFaceMessageBytes);
+                                        std::size_t max_bytes = kMaxFaceMessageBytes,
+                                        bool with_deviation = false);
 
 /// Splits a welded face's global ids into FaceNodeIds events of at most `max_bytes` each. With
 /// `topology` (the assembled mesh), each node's node_dim, node_entity and node_param are added.

@@ -123,7 +123,8 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
       }
       streamed[face.face_id] = true;
     }
-    for (pb::FaceMesh& part : SplitFaceMesh(face, params_.with_uv, params_.with_normals)) {
+    for (pb::FaceMesh& part : SplitFaceMesh(face, params_.with_uv, params_.with_normals,
+                                            kMaxFaceMessageBytes, params_.with_deviation)) {
       pb::MeshEvent event;
       *event.mutable_face() = std::move(part);
       queue.Push(std::move(event));
@@ -206,7 +207,8 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
         streamed[face.face_id]) {
       continue;
     }
-    for (pb::FaceMesh& part : SplitFaceMesh(face, params_.with_uv, params_.with_normals)) {
+    for (pb::FaceMesh& part : SplitFaceMesh(face, params_.with_uv, params_.with_normals,
+                                            kMaxFaceMessageBytes, params_.with_deviation)) {
       pb::MeshEvent out;
       *out.mutable_face() = std::move(part);
       ++face_messages_;

@@ -31,6 +31,8 @@ class MeshJob {
     bool with_normals = false;
     bool with_topology = false;  ///< FaceNodeIds carry node_dim, node_entity and node_param
     bool with_edges = false;     ///< EdgePolyline events (MeshResult::edges) before the Summary
+    /// FaceMesh.triangle_deviation (the engine's estimated deviation of every triangle).
+    bool with_deviation = false;
     /// The server's --max-triangles: the run is stopped (RESOURCE_EXHAUSTED) when the faces
     /// streamed so far pass it. 0 = no limit.
     int64_t max_triangles = 0;

@@ -199,6 +199,7 @@ class Worker {
     params.with_normals = mesh.return_fields().normals();
     params.with_topology = mesh.return_fields().node_topology();
     params.with_edges = mesh.return_fields().edges();
+    params.with_deviation = mesh.return_fields().triangle_deviation();
     params.max_triangles = mesh.max_triangles();
     if (mesh.deadline_unix_ms() > 0) {
       params.deadline =

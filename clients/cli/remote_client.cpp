@@ -201,6 +201,7 @@ Result<MeshResult> MeshRemote(const std::string& address, const std::string& mod
   request.mutable_return_fields()->set_normals(true);
   request.mutable_return_fields()->set_node_topology(true);
   request.mutable_return_fields()->set_edges(true);  // the edge lines, as a local run has them
+  request.mutable_return_fields()->set_triangle_deviation(true);  // VTU and PLY cell data
   bool not_found = false;
   Result<MeshResult> result = StreamMesh(stub.get(), address, request, context, &not_found);
   if (!not_found) return result;

@@ -10,6 +10,12 @@ void Assemble(std::vector<FaceMesh>* faces, const std::vector<std::vector<NodeRe
               Mesh* mesh) {
   *mesh = Mesh();
   std::map<std::tuple<int, int, uint64_t>, int64_t> shared;  // (dim, entity, t bits) -> id
+  // Per-triangle deviations only when every assembled face has them.
+  bool with_deviation = true;
+  for (const FaceMesh& f : *faces)
+    if (f.status == FaceStatus::kOk &&
+        f.triangle_deviation.size() != static_cast<size_t>(f.triangle_count()))
+      with_deviation = false;
   for (size_t fi = 0; fi < faces->size(); ++fi) {
     FaceMesh& f = (*faces)[fi];
     f.global_ids.clear();
@@ -43,6 +49,7 @@ void Assemble(std::vector<FaceMesh>* faces, const std::vector<std::vector<NodeRe
           mesh->triangles.end(),
           {static_cast<int32_t>(a), static_cast<int32_t>(b), static_cast<int32_t>(c)});
       mesh->triangle_face.push_back(f.face_id);
+      if (with_deviation) mesh->triangle_deviation.push_back(f.triangle_deviation[k / 3]);
     }
   }
 }

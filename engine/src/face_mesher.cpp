@@ -25,6 +25,7 @@ FaceMesh Failed(FaceMesh f, const std::string& reason) {
   f.status = FaceStatus::kFailed;
   f.reason = reason;
   f.xyz.clear(), f.uv.clear(), f.normals.clear(), f.triangles.clear();
+  f.triangle_deviation.clear();
   return f;
 }
 
@@ -37,7 +38,9 @@ double TriangleArea(const FaceMesh& f, int t) {
 
 // Compacts the live part of the working mesh into a FaceMesh, oriented outward. Triangles with
 // two corners at one point (at a pole) vanish.
-void Extract(const WorkMesh& m, bool reversed, FaceMesh* f, std::vector<NodeRef>* refs) {
+// `deviation` holds the estimated deviation of each working-mesh triangle (RefineStats).
+void Extract(const WorkMesh& m, const std::vector<double>& deviation, bool reversed, FaceMesh* f,
+             std::vector<NodeRef>* refs) {
   std::vector<int> index(m.node_count(), -1);
   for (int t = 0; t < static_cast<int>(m.tri.size()); ++t) {
     if (!m.alive[t]) continue;
@@ -62,6 +65,7 @@ void Extract(const WorkMesh& m, bool reversed, FaceMesh* f, std::vector<NodeRef>
     }
     if (reversed) std::swap(ids[1], ids[2]);
     f->triangles.insert(f->triangles.end(), {ids[0], ids[1], ids[2]});
+    f->triangle_deviation.push_back(deviation[t]);
   }
 }
 
@@ -164,7 +168,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
       f.reason = st.message();
       return f;
     }
-    Extract(m, face.Orientation() == TopAbs_REVERSED, &f, refs);
+    Extract(m, stats.deviation, face.Orientation() == TopAbs_REVERSED, &f, refs);
     if (f.triangles.empty()) return Failed(f, "no triangles survived");
     if (!job.nurbs) ExactPoleNormals(face, *refs, &f);
     f.max_deviation = stats.max_deviation;

@@ -328,10 +328,12 @@ void Refiner::Legalize(int node) {
 void Refiner::Finish() {
   stats_.max_violation = 0;
   stats_.max_deviation = 0;
+  stats_.deviation.assign(m_.tri.size(), 0.0);
   for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
     if (!m_.alive[t]) continue;
     stats_.max_violation = std::max(stats_.max_violation, measure_[t].violation);
     stats_.max_deviation = std::max(stats_.max_deviation, measure_[t].deviation);
+    stats_.deviation[t] = measure_[t].deviation;
   }
 }
 

@@ -10,6 +10,7 @@
 //   SmoothPass         move interior nodes to lower the largest deviation in their hull
 
 #include <cstdint>
+#include <vector>
 
 #include "measure.h"
 #include "operations.h"
@@ -29,6 +30,8 @@ struct RefineStats {
   bool budget_hit = false;   ///< stopped at the triangle cap
   double max_violation = 0;  ///< worst triangle afterwards (<= 1: all criteria met)
   double max_deviation = 0;  ///< worst estimated deviation afterwards, model units
+  /// 1 per working-mesh triangle (dead ones 0): its estimated deviation afterwards, model units.
+  std::vector<double> deviation;
 };
 
 /// Refines `mesh` on `surface` until every triangle meets `criteria` (or `max_triangles` is

@@ -19,6 +19,7 @@
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -204,6 +205,37 @@ TEST_P(CorpusTest, EveryFaceMeshedWatertightOutward) {
   EXPECT_GT(r.mesh.triangle_count(), 0);
 }
 
+// Every triangle carries the refinement's estimated deviation: one per triangle, within the
+// asked deviation, its largest per face the face's max_deviation, and the assembled mesh's array
+// the faces' in face order.
+TEST_P(CorpusTest, TriangleDeviationsAddUpToTheFaceEstimate) {
+  auto model = LoadData(GetParam());
+  ASSERT_TRUE(model);
+  MeshResult r = MeshOrDie(*model, MeshOptions());
+  std::vector<double> assembled;
+  int positive = 0;
+  for (const FaceMesh& f : r.faces) {
+    ASSERT_EQ(static_cast<int64_t>(f.triangle_deviation.size()), f.triangle_count())
+        << "face " << f.face_id;
+    double worst = 0;
+    for (double d : f.triangle_deviation) {
+      EXPECT_GE(d, 0.0);
+      worst = std::max(worst, d);
+      positive += d > 0;
+    }
+    EXPECT_EQ(worst, f.max_deviation) << "face " << f.face_id;
+    EXPECT_LE(worst, r.summary.requested_deviation * (1 + 1e-9)) << "face " << f.face_id;
+    assembled.insert(assembled.end(), f.triangle_deviation.begin(), f.triangle_deviation.end());
+  }
+  EXPECT_GT(positive, 0);  // curved faces deviate
+  ASSERT_EQ(static_cast<int64_t>(r.mesh.triangle_deviation.size()), r.mesh.triangle_count());
+  // No triangle collapses at a pole in these models: the arrays are the same.
+  if (assembled.size() == r.mesh.triangle_deviation.size())
+    EXPECT_EQ(assembled, r.mesh.triangle_deviation);
+  EXPECT_EQ(*std::max_element(r.mesh.triangle_deviation.begin(), r.mesh.triangle_deviation.end()),
+            r.summary.estimated_deviation);
+}
+
 TEST_P(CorpusTest, SameMeshAtAnyThreadCount) {
   auto model = LoadData(GetParam());
   ASSERT_TRUE(model);
@@ -214,6 +246,7 @@ TEST_P(CorpusTest, SameMeshAtAnyThreadCount) {
   EXPECT_EQ(a.mesh.xyz, b.mesh.xyz);
   EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
   EXPECT_EQ(a.mesh.triangle_face, b.mesh.triangle_face);
+  EXPECT_EQ(a.mesh.triangle_deviation, b.mesh.triangle_deviation);
 }
 
 INSTANTIATE_TEST_SUITE_P(Data, CorpusTest,

@@ -437,11 +437,16 @@ TEST_F(WritersTest, EveryFormatReadsBack) {
     EXPECT_GT(normal.Dot((a + b + c) / 3.0 - gp_XYZ(5, 10, 15)), 0.0);
   }
 
+  // Per-triangle deviations (a hand-made mesh has none; these need all their digits).
+  for (int64_t t = 0; t < triangles; ++t)
+    result.mesh.triangle_deviation.push_back(1e-3 * static_cast<double>(t + 1) / 7.0);
   ASSERT_TRUE(WriteMesh(*model, result, Path("box.ply")).ok());
   std::ifstream ply(Path("box.ply"));
   std::string line;
   int64_t ply_vertices = -1, ply_faces = -1;
+  bool ply_deviation = false;
   while (std::getline(ply, line) && line != "end_header") {
+    ply_deviation = ply_deviation || line == "property double deviation";
     std::sscanf(line.c_str(), "element vertex %ld", &ply_vertices);
     std::sscanf(line.c_str(), "element face %ld", &ply_faces);
   }
@@ -449,6 +454,8 @@ TEST_F(WritersTest, EveryFormatReadsBack) {
   // normal (a box face's normal is its axis), and node_id gives back the watertight mesh.
   EXPECT_EQ(ply_vertices, 6 * 9);
   ASSERT_EQ(ply_faces, triangles);
+  ASSERT_TRUE(ply_deviation);
+  ASSERT_EQ(static_cast<int64_t>(result.mesh.triangle_deviation.size()), triangles);
   std::vector<int64_t> node_of(ply_vertices);
   std::vector<gp_XYZ> normal_of(ply_vertices);
   std::set<int64_t> node_ids;
@@ -470,9 +477,11 @@ TEST_F(WritersTest, EveryFormatReadsBack) {
   for (int64_t t = 0; t < triangles; ++t) {
     int count, face_id;
     int64_t corner[3];
-    ply >> count >> corner[0] >> corner[1] >> corner[2] >> face_id;
+    double deviation;
+    ply >> count >> corner[0] >> corner[1] >> corner[2] >> face_id >> deviation;
     EXPECT_EQ(count, 3);
     EXPECT_EQ(face_id, result.mesh.triangle_face[t]);
+    EXPECT_EQ(deviation, result.mesh.triangle_deviation[t]);  // shortest round-trip text
     const int32_t* mesh_corner = &result.mesh.triangles[3 * t];
     auto at = [&](int32_t node) {
       const double* p = &result.mesh.xyz[3 * static_cast<int64_t>(node)];
@@ -497,6 +506,7 @@ TEST_F(WritersTest, EveryFormatReadsBack) {
             std::string::npos);
   EXPECT_NE(vtu.find("Name=\"node_id\""), std::string::npos);
   EXPECT_NE(vtu.find("Name=\"face_id\""), std::string::npos);
+  EXPECT_NE(vtu.find("Name=\"deviation\""), std::string::npos);
   EXPECT_NE(vtu.find("Name=\"Normals\""), std::string::npos);
 
   ASSERT_TRUE(WriteMesh(*model, result, Path("box.obj")).ok());

@@ -186,6 +186,7 @@ FaceMesh MakeFace(int id, int64_t nodes) {
     face.triangles.insert(
         face.triangles.end(),
         {static_cast<int32_t>(i), static_cast<int32_t>(i + 1), static_cast<int32_t>(i + 2)});
+    face.triangle_deviation.push_back(std::fabs(any(random)) / 4000.0);  // in [0, 0.25]
   }
   face.max_deviation = 0.25;
   face.area = 12.0;
@@ -213,7 +214,7 @@ pb::MeshEvent SummaryEvent(int64_t nodes, int64_t triangles) {
 /// Sends `face` through SplitFaceMesh and SplitFaceNodeIds into `builder`.
 void Stream(const FaceMesh& face, const Mesh* topology, MeshResultBuilder* builder,
             std::size_t max_bytes = kMaxFaceMessageBytes) {
-  for (pb::FaceMesh& part : SplitFaceMesh(face, true, true, max_bytes)) {
+  for (pb::FaceMesh& part : SplitFaceMesh(face, true, true, max_bytes, true)) {
     pb::MeshEvent event;
     *event.mutable_face() = std::move(part);
     ASSERT_TRUE(builder->Add(event).ok());
@@ -235,6 +236,7 @@ void ExpectSameFace(const FaceMesh& a, const FaceMesh& b) {
   EXPECT_EQ(a.normals, b.normals);
   EXPECT_EQ(a.global_ids, b.global_ids);
   EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.triangle_deviation, b.triangle_deviation);
   EXPECT_EQ(a.max_deviation, b.max_deviation);
   EXPECT_EQ(a.area, b.area);
   EXPECT_EQ(a.exact_area, b.exact_area);
@@ -252,8 +254,9 @@ TEST(SplitFaceMeshTest, SmallFaceIsOneMessage) {
 }
 
 TEST(SplitFaceMeshTest, LargeFaceSplitsUnderOneMiBAndJoinsBack) {
-  const FaceMesh face = MakeFace(1, 120'000);  // ~10 MB of arrays
-  const std::vector<pb::FaceMesh> parts = SplitFaceMesh(face, true, true);
+  const FaceMesh face = MakeFace(1, 120'000);  // ~11 MB of arrays
+  const std::vector<pb::FaceMesh> parts =
+      SplitFaceMesh(face, true, true, kMaxFaceMessageBytes, true);
   ASSERT_GT(parts.size(), 5u);
   for (const pb::FaceMesh& part : parts) {
     pb::MeshEvent event;
@@ -290,6 +293,7 @@ TEST(SplitFaceMeshTest, LargeFaceSplitsUnderOneMiBAndJoinsBack) {
   ExpectSameFace(result->faces[0], face);
   EXPECT_EQ(result->mesh.xyz, face.xyz);
   EXPECT_EQ(result->mesh.triangles, face.triangles);
+  EXPECT_EQ(result->mesh.triangle_deviation, face.triangle_deviation);
   EXPECT_EQ(result->mesh.node_entity, topology.node_entity);
   EXPECT_EQ(result->mesh.node_param, topology.node_param);
 }
@@ -301,6 +305,7 @@ TEST(SplitFaceMeshTest, OptionalArraysOnlyWhenAskedFor) {
   for (const pb::FaceMesh& part : lean) {
     EXPECT_EQ(part.uv_size(), 0);
     EXPECT_EQ(part.normals_size(), 0);
+    EXPECT_EQ(part.triangle_deviation_size(), 0);
     EXPECT_LE(part.ByteSizeLong(), 16u * 1024);
   }
   for (const pb::FaceNodeIds& part : SplitFaceNodeIds(face, nullptr, 16 * 1024)) {

@@ -1,4 +1,5 @@
-"""rdmesh-py: health, info, status and mesh through an rdmeshd server."""
+"""rdmesh-py: health, info, status and mesh through an rdmeshd server; view draws a mesh
+coloured by its estimated deviation."""
 
 import argparse
 import json
@@ -13,9 +14,35 @@ from rdmesh.client import Client, RdmeshError
 OUTPUT_FORMATS = (".msh", ".stl", ".obj", ".vtu", ".ply")
 
 
+def write_ply(path, xyz, triangles, cell_data):
+    """ASCII PLY of a welded mesh: double x y z per vertex; per face the vertex list and the
+    `cell_data` arrays (int32 as int, float64 as double; 17 digits, so they read back exactly).
+    meshio's PLY writer leaves cell data out."""
+    kinds = {np.dtype(np.int32): ("int", "%d"), np.dtype(np.float64): ("double", "%.17g")}
+    columns = [(name, np.asarray(values)) for name, values in cell_data.items()]
+    with open(path, "w") as file:
+        file.write("ply\nformat ascii 1.0\ncomment written by rdmesh-py\n")
+        file.write("element vertex %d\nproperty double x\nproperty double y\n"
+                   "property double z\n" % len(xyz))
+        file.write("element face %d\nproperty list uchar int vertex_indices\n" % len(triangles))
+        for name, values in columns:
+            file.write("property %s %s\n" % (kinds[values.dtype][0], name))
+        file.write("end_header\n")
+        np.savetxt(file, np.asarray(xyz, dtype=np.float64), fmt="%.17g")
+        rows = [np.full((len(triangles), 1), 3), np.asarray(triangles, dtype=np.int64)]
+        formats = ["%d"] * 4
+        for _, values in columns:
+            rows.append(values.reshape(-1, 1))
+            formats.append(kinds[values.dtype][1])
+        table = np.hstack([r.astype(object) for r in rows]) if len(triangles) else []
+        np.savetxt(file, table, fmt=" ".join(formats))
+
+
 def write_mesh(path, result):
-    """Writes the assembled mesh: .msh as MSH 4.1 with one surface per B-rep face, the other
-    formats with meshio (STL binary; VTU and PLY carry the face id per triangle)."""
+    """Writes the assembled mesh: .msh as MSH 4.1 with one surface per B-rep face, .ply as
+    ASCII PLY (write_ply), the other formats with meshio (STL binary). VTU and PLY carry the face
+    id per triangle and, when the result has them, each triangle's estimated deviation as cell
+    data "face_id" and "deviation"."""
     ext = os.path.splitext(path)[1].lower()
     if ext not in OUTPUT_FORMATS:
         raise ValueError("unsupported output format %r (use %s)" % (ext, " ".join(OUTPUT_FORMATS)))
@@ -24,10 +51,16 @@ def write_mesh(path, result):
         from rdmesh.msh import write_msh41
         write_msh41(path, result.xyz, result.triangles, result.triangle_face)
         return
-    import meshio
     cell_data = {}
     if ext in (".vtu", ".ply"):
-        cell_data = {"face_id": [result.triangle_face.astype(np.int32)]}
+        cell_data = {"face_id": result.triangle_face.astype(np.int32)}
+        if getattr(result, "triangle_deviation", None) is not None:
+            cell_data["deviation"] = np.asarray(result.triangle_deviation, dtype=np.float64)
+    if ext == ".ply":
+        write_ply(path, result.xyz, result.triangles, cell_data)
+        return
+    import meshio
+    cell_data = {name: [values] for name, values in cell_data.items()}
     mesh = meshio.Mesh(result.xyz, [("triangle", result.triangles.astype(np.int32))],
                        cell_data=cell_data)
     kwargs = {"binary": True} if ext == ".stl" else {}
@@ -117,7 +150,9 @@ def cmd_mesh(args):
     try:
         with _client(args) as client:
             result = client.mesh(_model_ref(client, args), progress=progress,
-                                 timeout=args.timeout, **options)
+                                 timeout=args.timeout,
+                                 triangle_deviation=args.output.lower().endswith((".vtu", ".ply")),
+                                 **options)
     finally:
         if bar is not None:
             bar.close()
@@ -147,6 +182,27 @@ def cmd_mesh(args):
     for face in result.faces:
         if face.status == "failed":
             print("face %d failed: %s" % (face.face_id, face.reason), file=sys.stderr)
+    return 0
+
+
+def cmd_view(args):
+    from rdmesh.view import render
+    try:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+    except ValueError:
+        raise ValueError("--size must be WIDTHxHEIGHT in pixels, e.g. 1000x750") from None
+    if not (16 <= width <= 8000 and 16 <= height <= 8000):
+        raise ValueError("--size must lie between 16x16 and 8000x8000 pixels")
+    shown = render(args.mesh, args.output, width=width, height=height, labels=args.labels,
+                   elev=args.elev, azim=args.azim, title=args.title)
+    if args.json:
+        print(json.dumps(dict(shown, output=os.path.abspath(args.output))))
+    else:
+        print("%s: %d triangles, colour range %.4g..%.4g -> %s"
+              % (args.mesh, shown["triangles"], shown["clim"][0], shown["clim"][1],
+                 os.path.abspath(args.output)))
+        for label in shown["labels"]:
+            print("  " + label["text"])
     return 0
 
 
@@ -187,12 +243,26 @@ def parser():
     mesh.add_argument("--faces", help="comma-separated face ids to mesh (default all)")
     mesh.add_argument("--no-progress", action="store_true", help="no progress bar")
     mesh.add_argument("--json", action="store_true", help="print the summary as one JSON line")
+
+    view = sub.add_parser("view", help="draw a mesh coloured by estimated deviation (PNG)")
+    view.add_argument("mesh", help=".vtu or .ply written by rdmesh or rdmesh-py mesh (with the "
+                                   "cell data 'deviation')")
+    view.add_argument("-o", "--output", required=True, help="the PNG to write")
+    view.add_argument("--size", default="1000x750", help="WIDTHxHEIGHT pixels (%(default)s)")
+    view.add_argument("--labels", type=int, default=5,
+                      help="label this many faces of largest deviation (%(default)s)")
+    view.add_argument("--elev", type=float, default=25.0, help="view elevation, degrees")
+    view.add_argument("--azim", type=float, default=-60.0, help="view azimuth, degrees")
+    view.add_argument("--title", help="title (default: file, triangles, largest deviation)")
+    view.add_argument("--json", action="store_true",
+                      help="print the colour range and the labels as one JSON line")
     return p
 
 
 def main(argv=None):
     args = parser().parse_args(argv)
-    commands = {"health": cmd_health, "status": cmd_status, "info": cmd_info, "mesh": cmd_mesh}
+    commands = {"health": cmd_health, "status": cmd_status, "info": cmd_info, "mesh": cmd_mesh,
+                "view": cmd_view}
     try:
         return commands[args.command](args)
     except RdmeshError as error:

@@ -61,6 +61,9 @@ class FaceResult:
     global_ids: np.ndarray  # (n,) int64, node ids in the assembled mesh (empty unless ok)
     uv: Optional[np.ndarray] = None  # (n, 2) float64, when asked for
     normals: Optional[np.ndarray] = None  # (n, 3) float64, when asked for
+    # (m,) float64, when asked for: each triangle's estimated distance to the exact surface,
+    # model units (its maximum is max_deviation)
+    triangle_deviation: Optional[np.ndarray] = None
     max_deviation: float = 0.0
     area: float = 0.0
     exact_area: float = 0.0
@@ -147,6 +150,9 @@ class MeshResult:
     job_id: str = ""
     largest_message: int = 0  # bytes of the largest event received
     edges: Optional[Edges] = None  # when asked for (mesh(..., edges=True))
+    # (T,) float64 per assembled triangle, when asked for (mesh(..., triangle_deviation=True)):
+    # the engine's estimated triangle-surface distance, model units
+    triangle_deviation: Optional[np.ndarray] = None
 
     @property
     def triangle_count(self):
@@ -159,6 +165,7 @@ class _FaceParts:
     def __init__(self, first):
         self.first = first
         self.xyz, self.uv, self.normals, self.triangles = [], [], [], []
+        self.deviation = []
         self.count = 0
 
     def add(self, part):
@@ -170,19 +177,24 @@ class _FaceParts:
         self.uv.append(np.array(part.uv, dtype=np.float64))
         self.normals.append(np.array(part.normals, dtype=np.float64))
         self.triangles.append(np.array(part.triangles, dtype=np.int32))
+        self.deviation.append(np.array(part.triangle_deviation, dtype=np.float64))
         return self.count == part.chunk_count
 
     def result(self):
         f = self.first
         uv = np.concatenate(self.uv).reshape(-1, 2)
         normals = np.concatenate(self.normals).reshape(-1, 3)
+        triangles = np.concatenate(self.triangles).reshape(-1, 3)
+        deviation = np.concatenate(self.deviation)
         return FaceResult(
             face_id=f.face_id, surface_type=f.surface_type,
             status=_FACE_STATUS.get(f.status, "unspecified"), reason=f.reason,
             xyz=np.concatenate(self.xyz).reshape(-1, 3),
-            triangles=np.concatenate(self.triangles).reshape(-1, 3),
+            triangles=triangles,
             global_ids=np.zeros(0, dtype=np.int64), uv=uv if len(uv) else None,
-            normals=normals if len(normals) else None, max_deviation=f.max_deviation,
+            normals=normals if len(normals) else None,
+            triangle_deviation=deviation if len(triangles) and len(deviation) == len(triangles)
+            else None, max_deviation=f.max_deviation,
             area=f.area, exact_area=f.exact_area, seconds=f.seconds, messages=self.count)
 
 
@@ -277,27 +289,31 @@ class Client:
         return self._with_model(
             model, lambda m: self._call(self._stub.GetModelInfo, m.ref, timeout, m.key), timeout)
 
-    def mesh_stream(self, model, uv=False, normals=False, timeout=None, edges=False, **options):
+    def mesh_stream(self, model, uv=False, normals=False, timeout=None, edges=False,
+                    triangle_deviation=False, **options):
         """The raw Mesh call: an iterator of MeshEvent messages that also has cancel(). A local
         file is uploaded first (a stream cannot be retried after NOT_FOUND)."""
         m = self._model(model)
         if m.data is not None:
             self._upload_model(m, timeout)
-        return self._mesh_call(m, uv, normals, timeout, options, edges)
+        return self._mesh_call(m, uv, normals, timeout, options, edges, triangle_deviation)
 
     def mesh(self, model, progress: Optional[Callable[[Progress], None]] = None, uv=False,
-             normals=False, timeout=None, edges=False, **options) -> MeshResult:
+             normals=False, timeout=None, edges=False, triangle_deviation=False,
+             **options) -> MeshResult:
         """Meshes a model (see info() for what `model` may be) and returns per-face numpy arrays
         plus the assembled watertight mesh. Options are those of MeshOptions:
         max_deviation, max_deviation_rel, rd_tolerance, max_triangles, min_edge_length,
         max_edge_length, nurbs, threads, face_ids, timeout_seconds, sharp_edge_angle.
         `progress` is called with a Progress as the run advances. `timeout` is the call's
         deadline in seconds. With `edges`, MeshResult.edges holds every B-rep edge as a
-        polyline over the assembled mesh's nodes (Edges)."""
+        polyline over the assembled mesh's nodes (Edges). With `triangle_deviation`, every
+        FaceResult and the MeshResult carry each triangle's estimated deviation."""
         mesh_options(**options)  # unknown options fail before any call
         return self._with_model(
-            model, lambda m: self._collect(self._mesh_call(m, uv, normals, timeout, options, edges),
-                                           progress, edges), timeout)
+            model, lambda m: self._collect(
+                self._mesh_call(m, uv, normals, timeout, options, edges, triangle_deviation),
+                progress, edges), timeout)
 
     # -- helpers ---------------------------------------------------------------------------
 
@@ -352,12 +368,13 @@ class Client:
                 raise RdmeshError(grpc.StatusCode.INTERNAL,
                                   "face %d: %d global ids for %d nodes"
                                   % (face.face_id, len(face.global_ids), len(face.xyz)))
-        xyz, triangles, triangle_face = assemble(ordered, summary.nodes)
+        xyz, triangles, triangle_face, deviation = assemble(ordered, summary.nodes, True)
         return MeshResult(model=started.model, options=started.options, summary=summary,
                           faces=ordered, xyz=xyz, triangles=triangles,
                           triangle_face=triangle_face, job_id=started.job_id,
                           largest_message=largest,
-                          edges=edge_parts.result() if edges else None)
+                          edges=edge_parts.result() if edges else None,
+                          triangle_deviation=deviation)
 
     def _metadata_for(self, key):
         return self._metadata + [(MODEL_HEADER, key)] if key else self._metadata
@@ -368,10 +385,11 @@ class Client:
         except grpc.RpcError as error:
             raise RdmeshError.wrap(error) from None
 
-    def _mesh_call(self, m, uv, normals, timeout, options, edges=False):
+    def _mesh_call(self, m, uv, normals, timeout, options, edges=False, triangle_deviation=False):
+        fields = pb.ReturnFields(uv=uv, normals=normals, edges=edges,
+                                 triangle_deviation=triangle_deviation)
         request = pb.MeshRequest(model=m.ref, options=mesh_options(**options),
-                                 return_fields=pb.ReturnFields(uv=uv, normals=normals,
-                                                               edges=edges))
+                                 return_fields=fields)
         return self._stub.Mesh(request, timeout=timeout, metadata=self._metadata_for(m.key))
 
     def _upload(self, data, name, key, path, timeout, chunk_bytes=CHUNK_BYTES):

@@ -45,6 +45,9 @@ struct FaceMesh {
   std::vector<int32_t> triangles;   ///< 3 per triangle: 0-based node ids, counter-clockwise seen
                                     ///< from outside (right-handed with the outward normal)
   std::vector<int64_t> global_ids;  ///< 1 per node: 0-based node id in the assembled Mesh
+  /// 1 per triangle: the refinement's estimated largest distance between the triangle and the
+  /// exact surface (MeasureTriangle), model units; its maximum is `max_deviation`.
+  std::vector<double> triangle_deviation;
 
   double max_deviation = 0.0;  ///< estimated largest mesh-surface distance, model units
   double area = 0.0;           ///< area of the triangles, model units^2
@@ -60,6 +63,9 @@ struct Mesh {
   std::vector<double> xyz;             ///< 3 per node, model units, world frame
   std::vector<int32_t> triangles;      ///< 3 per triangle, 0-based node ids, outward orientation
   std::vector<int32_t> triangle_face;  ///< 1 per triangle: the B-rep face id (1..F)
+  /// 1 per triangle: its face's FaceMesh::triangle_deviation, model units (empty when the faces
+  /// carry none, as a remote result whose stream did not ask for them).
+  std::vector<double> triangle_deviation;
   /// Where each node lies on the B-rep: 0 = vertex, 1 = edge, 2 = face interior.
   std::vector<int8_t> node_dim;
   /// 1 per node: the id of that vertex (1..V), edge (1..E) or face (1..F).

@@ -18,7 +18,11 @@ Status WritePly(const MeshResult& result, const std::string& path) {
       "property float nx\nproperty float ny\nproperty float nz\nproperty int node_id\n"
       "element face ");
   out.Int(mesh.triangle_count());
-  out.Text("\nproperty list uchar int vertex_indices\nproperty int face_id\nend_header\n");
+  const bool deviation =
+      mesh.triangle_deviation.size() == static_cast<size_t>(mesh.triangle_count());
+  out.Text("\nproperty list uchar int vertex_indices\nproperty int face_id\n");
+  if (deviation) out.Text("property double deviation\n");
+  out.Text("end_header\n");
   for (int64_t i = 0; i < split.vertex_count(); ++i) {
     const int64_t node = split.node[i];
     for (int k = 0; k < 3; ++k) {
@@ -40,6 +44,10 @@ Status WritePly(const MeshResult& result, const std::string& path) {
     }
     out.Char(' ');
     out.Int(mesh.triangle_face[t]);
+    if (deviation) {
+      out.Char(' ');
+      out.Number(mesh.triangle_deviation[t]);
+    }
     out.Char('\n');
   }
   return out.Close();

@@ -12,7 +12,8 @@ namespace rdmesh {
 /// shared by faces appears once per face. Per vertex: double x y z (model units), float nx ny nz
 /// (the face's exact surface normal there) and int node_id (the node's 0-based id in the
 /// watertight mesh: vertices with the same node_id are one node). Per face: uchar-int list
-/// vertex_indices (counter-clockwise seen from outside) and int face_id (the B-rep face id).
+/// vertex_indices (counter-clockwise seen from outside), int face_id (the B-rep face id) and,
+/// when the mesh carries them, double deviation (the estimated triangle-surface distance).
 /// kIoError naming the path on failure.
 Status WritePly(const MeshResult& result, const std::string& path);
 

@@ -53,6 +53,10 @@ Status WriteVtu(const MeshResult& result, const std::string& path) {
       "</DataArray>\n</PointData>\n<CellData Scalars=\"face_id\">\n"
       "<DataArray type=\"Int32\" Name=\"face_id\" format=\"ascii\">\n");
   WriteValues(mesh.triangle_face, 16, &out);
+  if (mesh.triangle_deviation.size() == static_cast<size_t>(triangles)) {
+    out.Text("</DataArray>\n<DataArray type=\"Float64\" Name=\"deviation\" format=\"ascii\">\n");
+    WriteValues(mesh.triangle_deviation, 8, &out);
+  }
   out.Text(
       "</DataArray>\n</CellData>\n<Points>\n"
       "<DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n");
