@@ -168,13 +168,15 @@ Result<std::vector<MeshResult>> StreamMesh(pb::Rdmesh::Stub* stub, const std::st
       }
       if (event.has_started()) started = event;
       if (event.has_level_started() && added.ok()) {
-        if (event.level_started().level() != static_cast<int>(builders.size()) - 1 ||
-            (event.level_started().level() > 0 && !builders.back().has_summary())) {
-          added = Status(StatusCode::kInvalidArgument, "levels out of order");
-        }
-        if (event.level_started().level() > 0) {
+        // Level 0 fills the first builder; each later level starts after the previous Summary.
+        const int level = event.level_started().level();
+        const bool first = level == 0 && builders.size() == 1 && !builders.back().has_summary();
+        const bool next = level > 0 && level == static_cast<int>(builders.size()) &&
+                          builders.back().has_summary();
+        if (!first && !next) added = Status(StatusCode::kInvalidArgument, "levels out of order");
+        if (next) {
           builders.emplace_back();
-          if (added.ok()) added = builders.back().Add(started);
+          added = builders.back().Add(started);
         }
         continue;
       }
