@@ -8,15 +8,10 @@
 #include <vector>
 
 #include "rdmesh/engine.h"
+#include "shape_fixture.h"
 
 namespace rdmesh {
 namespace {
-
-std::shared_ptr<const Model> LoadData(const std::string& file) {
-  auto model = LoadModel(std::string(RDMESH_TEST_DATA) + "/" + file);
-  EXPECT_TRUE(model.ok()) << model.status().ToString();
-  return model.ok() ? *model : nullptr;
-}
 
 TEST(LevelsTest, ResolveSortsCoarsestFirst) {
   auto levels = ResolveLevels({1e-3, 1e-2, 1e-4}, MeshOptions());
