@@ -1,11 +1,16 @@
 // Levels of detail: one loaded model meshed at several relative deviations, coarsest first.
 // Each level is an ordinary MeshModel run (its own edge grids, faces meshed against them), so a
-// level's mesh is the mesh of a single run at that deviation.
+// level's mesh is the mesh of a single run at that deviation. What does not depend on the
+// deviation is shared: the loaded model, and the face evaluators (FaceSurfaces), made by the
+// first level that meshes a face and lent to the next ones.
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <string>
 
+#include "budget.h"
+#include "face_mesher.h"
+#include "model.h"
 #include "rdmesh/engine.h"
 
 namespace rdmesh {
@@ -50,10 +55,12 @@ Status MeshModelLevels(const Model& model, const MeshOptions& options,
   // The timeout covers the whole run; each level's MeshModel sets the same deadline again, and
   // the earliest deadline wins.
   if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
+  FaceSurfaces surfaces(model.face_count());
   for (int i = 0; i < static_cast<int>(levels_rel.size()); ++i) {
     if (context->ShouldStop()) return context->StopStatus();
     if (callbacks.started) callbacks.started(i);
-    Result<MeshResult> result = MeshModel(model, LevelOptions(options, levels_rel[i]), context);
+    Result<MeshResult> result =
+        MeshModelWith(model, LevelOptions(options, levels_rel[i]), context, &surfaces);
     if (!result.ok()) return result.status();
     if (callbacks.done) {
       Status st = callbacks.done(i, std::move(*result));
