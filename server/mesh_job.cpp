@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "convert.h"
+#include "rdmesh/engine.h"
 
 namespace rdmesh::server {
 namespace {
@@ -104,6 +105,23 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
   bool over_limit = false;
   std::optional<Progress::Stage> last_stage;
   Clock::time_point last_progress;
+  // The level of detail being meshed (0 without levels), and its FaceMesh events so far; set by
+  // the engine thread between levels, when no face callback runs.
+  std::atomic<int> level{0};
+  std::atomic<int64_t> level_face_messages{0};
+  std::atomic<int64_t> face_messages{0};
+
+  const auto push_faces = [&](const FaceMesh& face) {
+    for (pb::FaceMesh& part : SplitFaceMesh(face, params_.with_uv, params_.with_normals,
+                                            kMaxFaceMessageBytes, params_.with_deviation)) {
+      part.set_level(level);
+      pb::MeshEvent event;
+      *event.mutable_face() = std::move(part);
+      ++level_face_messages;
+      ++face_messages;
+      queue.Push(std::move(event));
+    }
+  };
 
   // A triangle budget makes the engine run several trial meshes through the same callbacks;
   // only the final result counts then.
@@ -123,12 +141,7 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
       }
       streamed[face.face_id] = true;
     }
-    for (pb::FaceMesh& part : SplitFaceMesh(face, params_.with_uv, params_.with_normals,
-                                            kMaxFaceMessageBytes, params_.with_deviation)) {
-      pb::MeshEvent event;
-      *event.mutable_face() = std::move(part);
-      queue.Push(std::move(event));
-    }
+    push_faces(face);
   });
   context.set_progress_callback([&](const Progress& progress) {
     {
@@ -145,18 +158,98 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
     out->set_stage(ToProto(progress.stage));
     out->set_done(progress.done);
     out->set_total(progress.total);
+    out->set_level(level);
     queue.Push(std::move(event));
   });
 
-  std::optional<Result<MeshResult>> result;
+  // On the engine thread, once a level (or the one mesh) is done: the faces the per-face callback
+  // did not stream (budget runs, or faces the engine did not report), then every welded face's
+  // global ids, the edges and the Summary, queued behind its faces.
+  const auto finish_level = [&](int done_level, MeshResult mesh) -> Status {
+    if (params_.max_triangles > 0 && mesh.summary.triangles > params_.max_triangles) {
+      return Status(StatusCode::kResourceExhausted,
+                    "the mesh has " + std::to_string(mesh.summary.triangles) +
+                        " triangles, more than the server's --max-triangles limit of " +
+                        std::to_string(params_.max_triangles));
+    }
+    for (const FaceMesh& face : mesh.faces) {
+      if (context.ShouldStop()) return context.StopStatus();
+      if (face.face_id < 1 || face.face_id > face_total || !requested[face.face_id] ||
+          streamed[face.face_id]) {
+        continue;
+      }
+      push_faces(face);
+    }
+    for (const FaceMesh& face : mesh.faces) {
+      if (face.status != FaceStatus::kOk || face.face_id < 1 || face.face_id > face_total ||
+          !requested[face.face_id]) {
+        continue;
+      }
+      for (pb::FaceNodeIds& part :
+           SplitFaceNodeIds(face, params_.with_topology ? &mesh.mesh : nullptr)) {
+        part.set_level(done_level);
+        pb::MeshEvent out;
+        *out.mutable_node_ids() = std::move(part);
+        queue.Push(std::move(out));
+      }
+    }
+    if (params_.with_edges) {
+      for (const EdgeLine& line : mesh.edges) {
+        for (pb::EdgePolyline& part : SplitEdgeLine(line)) {
+          part.set_level(done_level);
+          pb::MeshEvent out;
+          *out.mutable_edge() = std::move(part);
+          queue.Push(std::move(out));
+        }
+      }
+    }
+    summary_ = mesh.summary;
+    pb::MeshEvent out;
+    pb::Summary* summary = out.mutable_summary();
+    *summary = ToProto(mesh.summary);
+    summary->set_level(done_level);
+    summary->set_total_seconds(SecondsSince(params_.start));
+    summary->set_face_messages(level_face_messages);
+    queue.Push(std::move(out));
+    return Status::Ok();
+  };
+  // Before each level of detail: its LevelStarted event, and fresh per-level state.
+  const auto start_level = [&](int next) {
+    {
+      std::lock_guard<std::mutex> lock(state_mutex);
+      std::fill(streamed.begin(), streamed.end(), false);
+      triangles_streamed = 0;
+      last_stage.reset();
+    }
+    level = next;
+    level_face_messages = 0;
+    const double rel = params_.levels[next];
+    pb::MeshEvent event;
+    pb::LevelStarted* started = event.mutable_level_started();
+    started->set_level(next);
+    started->set_levels(static_cast<int32_t>(params_.levels.size()));
+    started->set_max_deviation_rel(rel);
+    started->set_max_deviation_abs(rel * params_.model->info.diagonal);
+    queue.Push(std::move(event));
+  };
+
+  Status run = Status::Ok();
   active_jobs_->fetch_add(1);
   std::thread worker([&] {
     try {
-      result.emplace(MeshModel(model, params_.options, &context));
+      if (params_.levels.empty()) {
+        Result<MeshResult> result = MeshModel(model, params_.options, &context);
+        run = result.ok() ? finish_level(0, std::move(*result)) : result.status();
+      } else {
+        LevelCallbacks callbacks;
+        callbacks.started = start_level;
+        callbacks.done = finish_level;
+        run = MeshModelLevels(model, params_.options, params_.levels, &context, callbacks);
+      }
     } catch (const std::exception& e) {
-      result.emplace(Status(StatusCode::kInternal, std::string("engine exception: ") + e.what()));
+      run = Status(StatusCode::kInternal, std::string("engine exception: ") + e.what());
     } catch (...) {
-      result.emplace(Status(StatusCode::kInternal, "unknown engine exception"));
+      run = Status(StatusCode::kInternal, "unknown engine exception");
     }
     active_jobs_->fetch_sub(1);
     queue.Finish();
@@ -175,7 +268,6 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
       log_->Info("client cancelled; stopping the engine");
     }
     if (next == EventQueue::Next::kTimeout || client_gone || write_failed) continue;
-    if (event.has_face()) ++face_messages_;
     if (!write(event)) {
       write_failed = true;
       context.Cancel();
@@ -183,6 +275,7 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
     }
   }
   worker.join();
+  face_messages_ = face_messages;
 
   if (over_limit) {
     return Status(StatusCode::kResourceExhausted,
@@ -190,59 +283,8 @@ Status MeshJob::Run(const WriteFn& write, const CancelledFn& cancelled) {
                       std::to_string(params_.max_triangles) +
                       " triangles; ask for a coarser mesh or a max_triangles budget");
   }
-  if (!result->ok()) return result->status();
+  if (!run.ok()) return run;
   if (client_gone || write_failed) return Status(StatusCode::kCancelled, "client went away");
-  if (params_.max_triangles > 0 && result->value().summary.triangles > params_.max_triangles) {
-    return Status(StatusCode::kResourceExhausted,
-                  "the mesh has " + std::to_string(result->value().summary.triangles) +
-                      " triangles, more than the server's --max-triangles limit of " +
-                      std::to_string(params_.max_triangles));
-  }
-
-  // Faces the per-face callback did not report (budget runs, or faces the engine did not report)
-  // follow now, then every welded face's global ids.
-  const MeshResult& mesh = result->value();
-  for (const FaceMesh& face : mesh.faces) {
-    if (face.face_id < 1 || face.face_id > face_total || !requested[face.face_id] ||
-        streamed[face.face_id]) {
-      continue;
-    }
-    for (pb::FaceMesh& part : SplitFaceMesh(face, params_.with_uv, params_.with_normals,
-                                            kMaxFaceMessageBytes, params_.with_deviation)) {
-      pb::MeshEvent out;
-      *out.mutable_face() = std::move(part);
-      ++face_messages_;
-      if (!write(out)) return Status(StatusCode::kCancelled, "client went away");
-    }
-  }
-  for (const FaceMesh& face : mesh.faces) {
-    if (face.status != FaceStatus::kOk || face.face_id < 1 || face.face_id > face_total ||
-        !requested[face.face_id]) {
-      continue;
-    }
-    for (pb::FaceNodeIds& part :
-         SplitFaceNodeIds(face, params_.with_topology ? &mesh.mesh : nullptr)) {
-      pb::MeshEvent out;
-      *out.mutable_node_ids() = std::move(part);
-      if (!write(out)) return Status(StatusCode::kCancelled, "client went away");
-    }
-  }
-  if (params_.with_edges) {
-    for (const EdgeLine& line : mesh.edges) {
-      for (pb::EdgePolyline& part : SplitEdgeLine(line)) {
-        pb::MeshEvent out;
-        *out.mutable_edge() = std::move(part);
-        if (!write(out)) return Status(StatusCode::kCancelled, "client went away");
-      }
-    }
-  }
-  summary_ = mesh.summary;
-  pb::MeshEvent out;
-  pb::Summary* summary = out.mutable_summary();
-  *summary = ToProto(mesh.summary);
-  summary->set_total_seconds(SecondsSince(params_.start));
-  summary->set_face_messages(face_messages_);
-  if (!write(out)) return Status(StatusCode::kCancelled, "client went away");
   return Status::Ok();
 }
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <vector>
 
 #include "log.h"
 #include "model_cache.h"
@@ -16,12 +17,12 @@ namespace rdmesh::server {
 
 /// One Mesh call. The engine runs on a thread of its own; its per-face and progress callbacks
 /// turn results into MeshEvent messages (faces split to at most ~1 MiB) and queue them; the
-/// calling thread drains the queue and is the only one that writes to the stream. After the run,
-/// the welded faces' global ids (FaceNodeIds) and the Summary follow. With a triangle budget the
-/// engine meshes the model several times, so faces are then sent after the run, from the final
-/// result. Client
-/// cancellation, the call's deadline and a failed write all cancel the engine's Context, which
-/// stops its workers within a second.
+/// calling thread drains the queue and is the only one that writes to the stream. After the run
+/// (on the engine thread, queued behind the faces), the welded faces' global ids (FaceNodeIds),
+/// the edges and the Summary follow. With a triangle budget the engine meshes the model several
+/// times, so faces are then sent after the run, from the final result. With levels of detail,
+/// each level is such a run, after a LevelStarted event. Client cancellation, the call's deadline
+/// and a failed write all cancel the engine's Context, which stops its workers within a second.
 class MeshJob {
  public:
   struct Params {
@@ -33,6 +34,9 @@ class MeshJob {
     bool with_edges = false;     ///< EdgePolyline events (MeshResult::edges) before the Summary
     /// FaceMesh.triangle_deviation (the engine's estimated deviation of every triangle).
     bool with_deviation = false;
+    /// Levels of detail (ResolveLevels: relative deviations, coarsest first): the model is
+    /// meshed once per level, each streamed after a LevelStarted event. Empty = one mesh.
+    std::vector<double> levels;
     /// The server's --max-triangles: the run is stopped (RESOURCE_EXHAUSTED) when the faces
     /// streamed so far pass it. 0 = no limit.
     int64_t max_triangles = 0;

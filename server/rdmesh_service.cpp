@@ -4,6 +4,7 @@
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "access.h"
 #include "convert.h"
@@ -285,6 +286,20 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
   if (Status valid = ValidateOptions(*options); !valid.ok()) {
     return Finish(log, ToGrpcStatus(valid), start);
   }
+  std::vector<double> levels;  // levels of detail, coarsest first; empty = one mesh
+  if (request->lod_deviation_rel_size() > 0) {
+    if (request->options().has_max_deviation_rel()) {
+      return Finish(log,
+                    ToGrpcStatus(Status(StatusCode::kInvalidArgument,
+                                        "lod_deviation_rel replaces max_deviation_rel: leave "
+                                        "max_deviation_rel unset")),
+                    start);
+    }
+    Result<std::vector<double>> resolved = ResolveLevels(
+        {request->lod_deviation_rel().begin(), request->lod_deviation_rel().end()}, *options);
+    if (!resolved.ok()) return Finish(log, ToGrpcStatus(resolved.status()), start);
+    levels = std::move(*resolved);
+  }
   if (config_.max_triangles > 0 && options->max_triangles > config_.max_triangles) {
     return Finish(log,
                   ToGrpcStatus(Status(StatusCode::kInvalidArgument,
@@ -350,6 +365,7 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
   *mesh->mutable_options() = ToProto(*options);
   *mesh->mutable_return_fields() = request->return_fields();
   mesh->set_max_triangles(config_.max_triangles);
+  for (double level : levels) mesh->add_lod_deviation_rel(level);
   if (const auto deadline = context->deadline();
       deadline < std::chrono::system_clock::time_point::max() - std::chrono::hours(24 * 365)) {
     mesh->set_deadline_unix_ms(
@@ -378,11 +394,14 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
           started->mutable_model()->set_cached(reply.ready().model().cached());
           started->mutable_model()->set_load_seconds(reply.ready().model().load_seconds());
           started->mutable_model()->set_from_store(reply.ready().model().from_store());
+          // With levels of detail, the options of the finest level.
+          const MeshOptions shown =
+              levels.empty() ? *options : LevelOptions(*options, levels.back());
           pb::ResolvedOptions* resolved = started->mutable_options();
-          *resolved->mutable_options() = ToProto(*options);
-          resolved->set_max_deviation_abs(options->max_deviation > 0
-                                              ? options->max_deviation
-                                              : options->max_deviation_rel * model.info.diagonal());
+          *resolved->mutable_options() = ToProto(shown);
+          resolved->set_max_deviation_abs(shown.max_deviation > 0
+                                              ? shown.max_deviation
+                                              : shown.max_deviation_rel * model.info.diagonal());
           resolved->set_threads(options->threads);
           resolved->set_server_max_triangles(config_.max_triangles);
           started->set_faces_requested(
@@ -390,10 +409,11 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
           started->set_queue_seconds(queue_seconds);
           log.Info(
               "meshing {} faces on {} threads in worker {}{}: max_deviation {} (abs {}), rd {}, "
-              "budget {}",
+              "budget {}, levels {}",
               started->faces_requested(), options->threads, worker->pid(),
-              reply.ready().model().cached() ? "" : " (parsed the model)", options->max_deviation,
-              resolved->max_deviation_abs(), options->rd_tolerance, options->max_triangles);
+              reply.ready().model().cached() ? "" : " (parsed the model)", shown.max_deviation,
+              resolved->max_deviation_abs(), options->rd_tolerance, options->max_triangles,
+              levels.size());
           return writer->Write(started_event);
         }
         if (!reply.has_event()) return true;

@@ -201,6 +201,7 @@ class Worker {
     params.with_edges = mesh.return_fields().edges();
     params.with_deviation = mesh.return_fields().triangle_deviation();
     params.max_triangles = mesh.max_triangles();
+    params.levels.assign(mesh.lod_deviation_rel().begin(), mesh.lod_deviation_rel().end());
     if (mesh.deadline_unix_ms() > 0) {
       params.deadline =
           std::chrono::system_clock::time_point(std::chrono::milliseconds(mesh.deadline_unix_ms()));

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "exit_codes.h"
 #include "isolation.h"
@@ -130,6 +131,8 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
                    bool strict, const std::string& remote) {
   Result<MeshOptions> options = BuildMeshOptions(mesh_flags);
   if (!options.ok()) return Fail(flags, kExitUsage, options.status());
+  Result<std::vector<double>> levels = BuildLevels(mesh_flags, *options);
+  if (!levels.ok()) return Fail(flags, kExitUsage, levels.status());
   std::string extension = std::filesystem::path(output).extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   bool known = false;
@@ -179,39 +182,91 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
 
   TerminalProgress progress(!flags.quiet);
   context.set_progress_callback([&progress](const Progress& p) { progress.Update(p); });
+  // One result, or one per level of detail (coarsest first).
+  std::vector<MeshResult> results;
+  Status meshed = Status::Ok();
+  if (levels->empty()) {
 #ifdef RDMESH_WITH_REMOTE
-  Result<MeshResult> result = remote.empty() ? MeshModel(**model, *options, &context)
-                                             : MeshRemote(remote, flags.model, *options, &context);
+    Result<MeshResult> result = remote.empty()
+                                    ? MeshModel(**model, *options, &context)
+                                    : MeshRemote(remote, flags.model, *options, &context);
 #else
-  Result<MeshResult> result = MeshModel(**model, *options, &context);
+    Result<MeshResult> result = MeshModel(**model, *options, &context);
 #endif
+    if (result.ok())
+      results.push_back(std::move(*result));
+    else
+      meshed = result.status();
+  } else {
+    LevelCallbacks callbacks;
+    callbacks.done = [&results](int, MeshResult result) {
+      results.push_back(std::move(result));
+      return Status::Ok();
+    };
+#ifdef RDMESH_WITH_REMOTE
+    if (!remote.empty()) {
+      Result<std::vector<MeshResult>> remote_levels =
+          MeshRemoteLevels(remote, flags.model, *options, *levels, &context);
+      if (remote_levels.ok())
+        results = std::move(*remote_levels);
+      else
+        meshed = remote_levels.status();
+    } else {
+      meshed = MeshModelLevels(**model, *options, *levels, &context, callbacks);
+    }
+#else
+    meshed = MeshModelLevels(**model, *options, *levels, &context, callbacks);
+#endif
+  }
   progress.Finish();
   watchdog.Disarm();  // writing is not bounded by --timeout
-  if (!result.ok()) {
-    if (IsStop(result.status()))
-      return Fail(
-          flags, kExitStopped,
-          StopMessage(result.status(), options->timeout_seconds, "meshing '" + flags.model + "'"));
-    if (result.status().code() == StatusCode::kInvalidArgument)
-      return Fail(flags, kExitUsage, result.status());
-    return Fail(flags, kExitMeshFailed, result.status());
+  if (!meshed.ok()) {
+    if (IsStop(meshed))
+      return Fail(flags, kExitStopped,
+                  StopMessage(meshed, options->timeout_seconds, "meshing '" + flags.model + "'"));
+    if (meshed.code() == StatusCode::kInvalidArgument) return Fail(flags, kExitUsage, meshed);
+    return Fail(flags, kExitMeshFailed, meshed);
   }
 
   EnterPhase(Phase::kWriting);
-  auto write_start = std::chrono::steady_clock::now();
-  Status written = WriteMesh(**model, *result, output, mesh_flags.write);
-  run.write_seconds = SecondsSince(write_start);
-  if (!written.ok()) return Fail(flags, kExitWriteFailed, written);
+  nlohmann::ordered_json level_reports = nlohmann::ordered_json::array();
+  for (size_t i = 0; i < results.size(); ++i) {
+    RunInfo level_run = run;
+    if (!levels->empty()) level_run.output_path = LevelPath(output, static_cast<int>(i));
+    auto write_start = std::chrono::steady_clock::now();
+    Status written = WriteMesh(**model, results[i], level_run.output_path, mesh_flags.write);
+    level_run.write_seconds = SecondsSince(write_start);
+    if (!written.ok()) return Fail(flags, kExitWriteFailed, written);
+    std::ostream& out = flags.json ? std::cerr : std::cout;
+    if (!flags.quiet && !levels->empty())
+      out << "level      " << i << " of " << levels->size() << ", max deviation rel "
+          << (*levels)[i] << "\n";
+    if (!flags.quiet) PrintMeshReport(info, results[i], level_run, out);
+    nlohmann::ordered_json report = MeshReportJson(results[i], level_run);
+    if (levels->empty()) {
+      if (flags.json) std::cout << report.dump() << std::endl;
+    } else {
+      report["level"] = i;
+      report["max_deviation_rel"] = (*levels)[i];
+      level_reports.push_back(std::move(report));
+    }
+  }
+  if (flags.json && !levels->empty()) {
+    nlohmann::ordered_json json = {{"model", flags.model},
+                                   {"load_seconds", run.load_seconds},
+                                   {"levels", std::move(level_reports)}};
+    AddStoreJson(run, &json);
+    std::cout << json.dump() << std::endl;
+  }
 
-  if (!flags.quiet) PrintMeshReport(info, *result, run, flags.json ? std::cerr : std::cout);
-  if (flags.json) std::cout << MeshReportJson(*result, run).dump() << std::endl;
-
-  const MeshSummary& summary = result->summary;
-  if (summary.faces_failed > 0 && (strict || summary.faces_ok == 0)) {
-    std::cerr << "rdmesh: error: " << summary.faces_failed << " face"
-              << (summary.faces_failed == 1 ? "" : "s") << " of '" << flags.model
-              << "' failed to mesh" << (strict ? " (--strict)" : "") << "\n";
-    return kExitMeshFailed;
+  for (const MeshResult& result : results) {
+    const MeshSummary& summary = result.summary;
+    if (summary.faces_failed > 0 && (strict || summary.faces_ok == 0)) {
+      std::cerr << "rdmesh: error: " << summary.faces_failed << " face"
+                << (summary.faces_failed == 1 ? "" : "s") << " of '" << flags.model
+                << "' failed to mesh" << (strict ? " (--strict)" : "") << "\n";
+      return kExitMeshFailed;
+    }
   }
   return kExitOk;
 }

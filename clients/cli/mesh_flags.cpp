@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdlib>
+#include <filesystem>
 #include <regex>
 #include <sstream>
 
@@ -27,7 +28,7 @@ int ParseId(const std::string& text) {
 std::string FlagNames(std::string message) {
   static const std::regex kField(
       "\\b(max_deviation_rel|max_deviation|rd_tolerance|max_triangles|min_edge_length|"
-      "max_edge_length|threads|timeout_seconds)\\b");
+      "max_edge_length|threads|timeout_seconds|lod)\\b");
   std::string result;
   auto begin = std::sregex_iterator(message.begin(), message.end(), kField);
   size_t last = 0;
@@ -50,10 +51,17 @@ void AddMeshFlags(CLI::App* app, MeshFlags* flags) {
                   "0 = use --max-deviation-rel")
       ->capture_default_str()
       ->group("Meshing");
-  app->add_option("--max-deviation-rel", o.max_deviation_rel,
-                  "Largest distance as a fraction of the bounding-box diagonal (used when "
-                  "--max-deviation is 0)")
-      ->capture_default_str()
+  flags->deviation_rel_flag =
+      app->add_option("--max-deviation-rel", o.max_deviation_rel,
+                      "Largest distance as a fraction of the bounding-box diagonal (used when "
+                      "--max-deviation is 0)")
+          ->capture_default_str()
+          ->group("Meshing");
+  app->add_option("--lod", flags->lod,
+                  "Levels of detail: relative deviations (as --max-deviation-rel), e.g. "
+                  "1e-2,1e-3,1e-4; the model is read once and meshed once per level, coarsest "
+                  "first, each level written to OUT.lodN.EXT (N = 0 the coarsest) and equal to "
+                  "a run at --max-deviation-rel of that level")
       ->group("Meshing");
   app->add_option("--rd-tolerance", o.rd_tolerance,
                   "Representation-deficit tolerance, scale free (a segment turning by theta "
@@ -134,6 +142,39 @@ Result<MeshOptions> BuildMeshOptions(const MeshFlags& flags) {
   Status valid = ValidateOptions(options);
   if (!valid.ok()) return Status(valid.code(), FlagNames(valid.message()));
   return options;
+}
+
+Result<std::vector<double>> BuildLevels(const MeshFlags& flags, const MeshOptions& options) {
+  if (flags.lod.empty()) return std::vector<double>();
+  if (flags.deviation_rel_flag != nullptr && flags.deviation_rel_flag->count() > 0)
+    return Status(StatusCode::kInvalidArgument,
+                  "--lod sets the relative deviation of each level: leave out --max-deviation-rel");
+  std::vector<double> levels;
+  std::stringstream items(flags.lod);
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    item.erase(std::remove_if(item.begin(), item.end(), ::isspace), item.end());
+    char* end = nullptr;
+    errno = 0;
+    const double value = std::strtod(item.c_str(), &end);
+    if (item.empty() || errno != 0 || end != item.c_str() + item.size())
+      return Status(StatusCode::kInvalidArgument,
+                    "--lod: '" + item +
+                        "' is not a number (give relative deviations like "
+                        "1e-2,1e-3,1e-4)");
+    levels.push_back(value);
+  }
+  Result<std::vector<double>> resolved = ResolveLevels(levels, options);
+  if (!resolved.ok())
+    return Status(resolved.status().code(), FlagNames(resolved.status().message()));
+  return resolved;
+}
+
+std::string LevelPath(const std::string& output, int level) {
+  const std::filesystem::path path(output);
+  std::filesystem::path level_path = path;
+  level_path.replace_extension(".lod" + std::to_string(level) + path.extension().string());
+  return level_path.string();
 }
 
 }  // namespace rdmesh::cli

@@ -17,6 +17,8 @@ struct MeshFlags {
   MeshOptions options;
   std::string faces;   ///< "1,5,7" or ranges "2-9"; empty = all faces
   WriteOptions write;  ///< how the output file is written
+  std::string lod;     ///< --lod: relative deviations "1e-2,1e-3,1e-4"; empty = one mesh
+  const CLI::Option* deviation_rel_flag = nullptr;  ///< --max-deviation-rel, to see if given
 };
 
 /// Adds --max-deviation, --max-deviation-rel, --rd-tolerance, --max-triangles,
@@ -32,5 +34,13 @@ Result<std::vector<int>> ParseFaceList(const std::string& text);
 /// The MeshOptions the flags ask for, checked with ValidateOptions; kInvalidArgument with a
 /// readable message otherwise.
 Result<MeshOptions> BuildMeshOptions(const MeshFlags& flags);
+
+/// The levels of detail --lod asks for (ResolveLevels: coarsest first), empty without --lod.
+/// kInvalidArgument for a bad list, or --lod with --max-deviation-rel, --max-deviation or
+/// --max-triangles.
+Result<std::vector<double>> BuildLevels(const MeshFlags& flags, const MeshOptions& options);
+
+/// Where level `level` of a --lod run is written: OUT.EXT -> OUT.lodN.EXT (N = 0 the coarsest).
+std::string LevelPath(const std::string& output, int level);
 
 }  // namespace rdmesh::cli

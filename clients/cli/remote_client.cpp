@@ -138,16 +138,19 @@ Status Upload(pb::Rdmesh::Stub* stub, const std::string& address, const std::str
   return Status::Ok();
 }
 
-/// One Mesh call, rebuilding the result from the stream. Sets `*not_found` when the server does
-/// not hold the model (the call then returns the server's NOT_FOUND).
-Result<MeshResult> StreamMesh(pb::Rdmesh::Stub* stub, const std::string& address,
-                              const pb::MeshRequest& request, Context* context, bool* not_found) {
+/// One Mesh call, rebuilding the result from the stream: one MeshResult, or one per level of
+/// detail (each LevelStarted event starts the next). Sets `*not_found` when the server does not
+/// hold the model (the call then returns the server's NOT_FOUND).
+Result<std::vector<MeshResult>> StreamMesh(pb::Rdmesh::Stub* stub, const std::string& address,
+                                           const pb::MeshRequest& request, Context* context,
+                                           bool* not_found) {
   *not_found = false;
   grpc::ClientContext call;
   if (Status prepared = PrepareCall(&call, request.model().model_id()); !prepared.ok()) {
     return prepared;
   }
-  server::MeshResultBuilder builder;
+  std::vector<server::MeshResultBuilder> builders(1);
+  pb::MeshEvent started;  // the Started event, given to every level's builder
   grpc::Status status;
   {
     StopWatcher watcher(context, &call);
@@ -163,7 +166,21 @@ Result<MeshResult> StreamMesh(pb::Rdmesh::Stub* stub, const std::string& address
         context->ReportProgress(progress);
         continue;
       }
-      if (added.ok()) added = builder.Add(event);
+      if (event.has_started()) started = event;
+      if (event.has_level_started() && added.ok()) {
+        // Level 0 fills the first builder; each later level starts after the previous Summary.
+        const int level = event.level_started().level();
+        const bool first = level == 0 && builders.size() == 1 && !builders.back().has_summary();
+        const bool next = level > 0 && level == static_cast<int>(builders.size()) &&
+                          builders.back().has_summary();
+        if (!first && !next) added = Status(StatusCode::kInvalidArgument, "levels out of order");
+        if (next) {
+          builders.emplace_back();
+          added = builders.back().Add(started);
+        }
+        continue;
+      }
+      if (added.ok()) added = builders.back().Add(event);
       if (!added.ok()) call.TryCancel();
     }
     status = reader->Finish();
@@ -172,16 +189,26 @@ Result<MeshResult> StreamMesh(pb::Rdmesh::Stub* stub, const std::string& address
     }
   }
   if (!status.ok()) {
-    *not_found = status.error_code() == grpc::StatusCode::NOT_FOUND && !builder.has_started();
+    *not_found =
+        status.error_code() == grpc::StatusCode::NOT_FOUND && !builders.front().has_started();
     return CallFailed(status, context, address);
   }
-  return builder.Finish();
+  std::vector<MeshResult> results;
+  for (server::MeshResultBuilder& builder : builders) {
+    Result<MeshResult> result = builder.Finish();
+    if (!result.ok()) return result.status();
+    results.push_back(std::move(*result));
+  }
+  return results;
 }
 
 }  // namespace
 
-Result<MeshResult> MeshRemote(const std::string& address, const std::string& model_path,
-                              const MeshOptions& options, Context* context) {
+Result<std::vector<MeshResult>> MeshRemoteLevels(const std::string& address,
+                                                 const std::string& model_path,
+                                                 const MeshOptions& options,
+                                                 const std::vector<double>& levels_rel,
+                                                 Context* context) {
   Context local;
   if (context == nullptr) context = &local;
   if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
@@ -202,14 +229,30 @@ Result<MeshResult> MeshRemote(const std::string& address, const std::string& mod
   request.mutable_return_fields()->set_node_topology(true);
   request.mutable_return_fields()->set_edges(true);  // the edge lines, as a local run has them
   request.mutable_return_fields()->set_triangle_deviation(true);  // VTU and PLY cell data
+  if (!levels_rel.empty()) {
+    // The levels replace the relative deviation, which the request leaves unset then.
+    request.mutable_options()->clear_max_deviation_rel();
+    for (double level : levels_rel) request.add_lod_deviation_rel(level);
+  }
   bool not_found = false;
-  Result<MeshResult> result = StreamMesh(stub.get(), address, request, context, &not_found);
+  Result<std::vector<MeshResult>> result =
+      StreamMesh(stub.get(), address, request, context, &not_found);
   if (!not_found) return result;
   if (Status uploaded = Upload(stub.get(), address, model_path, *bytes, model_id, context);
       !uploaded.ok()) {
     return uploaded;
   }
   return StreamMesh(stub.get(), address, request, context, &not_found);
+}
+
+Result<MeshResult> MeshRemote(const std::string& address, const std::string& model_path,
+                              const MeshOptions& options, Context* context) {
+  Result<std::vector<MeshResult>> results =
+      MeshRemoteLevels(address, model_path, options, {}, context);
+  if (!results.ok()) return results.status();
+  if (results->size() != 1)
+    return Status(StatusCode::kInternal, "rdmeshd sent levels of detail that were not asked for");
+  return std::move(results->front());
 }
 
 }  // namespace rdmesh::cli

@@ -2,6 +2,7 @@
 // `rdmesh mesh --remote HOST:PORT`: the same run, on an rdmeshd server.
 
 #include <string>
+#include <vector>
 
 #include "rdmesh/context.h"
 #include "rdmesh/engine.h"
@@ -25,5 +26,14 @@ namespace rdmesh::cli {
 /// front of several rdmeshd replicas routes (docs/ROUTING.md).
 Result<MeshResult> MeshRemote(const std::string& address, const std::string& model_path,
                               const MeshOptions& options, Context* context);
+
+/// MeshRemote with levels of detail (MeshRequest.lod_deviation_rel; `levels_rel` as
+/// ResolveLevels returns them): one MeshResult per level, coarsest first, each as a local
+/// MeshModel at that level returns it. Empty `levels_rel`: one result, as MeshRemote.
+Result<std::vector<MeshResult>> MeshRemoteLevels(const std::string& address,
+                                                 const std::string& model_path,
+                                                 const MeshOptions& options,
+                                                 const std::vector<double>& levels_rel,
+                                                 Context* context);
 
 }  // namespace rdmesh::cli

@@ -31,7 +31,7 @@ constexpr int64_t kFaceTriangleCap = 20'000'000;
 }  // namespace
 
 Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& options, double deviation,
-                                   Context* context) {
+                                   Context* context, FaceSurfaces* surfaces) {
   auto t0 = Clock::now();
   const int nf = model.face_count();
   MeshResult result;
@@ -83,6 +83,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   job.criteria.min_length = options.min_edge_length;
   job.max_triangles = kFaceTriangleCap;
   job.nurbs = options.nurbs;
+  job.surfaces = surfaces;
   std::vector<std::vector<NodeRef>> refs(nf);
   std::atomic<int64_t> done{0};
   const int64_t total = std::count(wanted.begin(), wanted.end(), true);
@@ -120,7 +121,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
     }
     if (rep == f) continue;
     std::vector<NodeRef> copy_refs;
-    slot = PlaceCopy(model, f, result.faces[rep - 1], refs[rep - 1], grids, &copy_refs);
+    slot = PlaceCopy(model, f, result.faces[rep - 1], refs[rep - 1], grids, &copy_refs, surfaces);
     refs[f - 1] = std::move(copy_refs);
     finished(slot);
   }
@@ -166,6 +167,11 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
 }
 
 Result<MeshResult> MeshModel(const Model& model, const MeshOptions& options, Context* context) {
+  return MeshModelWith(model, options, context, nullptr);
+}
+
+Result<MeshResult> MeshModelWith(const Model& model, const MeshOptions& options, Context* context,
+                                 FaceSurfaces* surfaces) {
   Status st = ValidateOptions(options);
   if (!st.ok()) return st;
   Context local;
@@ -175,7 +181,7 @@ Result<MeshResult> MeshModel(const Model& model, const MeshOptions& options, Con
                                                : options.max_deviation_rel * model.info.diagonal;
   Result<MeshResult> result = options.max_triangles > 0
                                   ? MeshWithinBudget(model, options, context)
-                                  : MeshAtDeviation(model, options, deviation, context);
+                                  : MeshAtDeviation(model, options, deviation, context, surfaces);
   if (!result.ok()) return result;
   Result<std::vector<EdgeLine>> edges =
       BuildEdgeLines(model, result->mesh, options.sharp_edge_angle);

@@ -102,6 +102,27 @@ void ExactPoleNormals(const TopoDS_Face& face, const std::vector<NodeRef>& refs,
   }
 }
 
+// A view of an evaluator owned elsewhere (FaceSurfaces): the same values, one call further.
+class LentSurface final : public Surface {
+ public:
+  explicit LentSurface(Surface* inner) : inner_(inner) {
+    umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
+    uknots = inner_->uknots, vknots = inner_->vknots;
+  }
+  Vec3 Point(double u, double v) override { return inner_->Point(u, v); }
+  Vec3 Normal(double u, double v) override { return inner_->Normal(u, v); }
+
+ private:
+  Surface* inner_;
+};
+
+// The evaluator of a face: lent by `surfaces` when there are some, else made for this use.
+std::unique_ptr<Surface> FaceSurface(const Model& model, int face_id, bool nurbs,
+                                     FaceSurfaces* surfaces) {
+  if (surfaces) return surfaces->Lend(model, face_id, nurbs);
+  return MakeFaceSurface(model.face(face_id), nurbs);
+}
+
 // A face left unmeshed because the run was asked to stop (the run's status says why).
 FaceMesh Stopped(FaceMesh f, const Context& context) {
   f = Failed(std::move(f), context.StopStatus().message());
@@ -110,6 +131,15 @@ FaceMesh Stopped(FaceMesh f, const Context& context) {
 }
 
 }  // namespace
+
+FaceSurfaces::FaceSurfaces(int face_count) : exact_(face_count), nurbs_(face_count) {}
+FaceSurfaces::~FaceSurfaces() = default;
+
+std::unique_ptr<Surface> FaceSurfaces::Lend(const Model& model, int face_id, bool nurbs) {
+  std::unique_ptr<Surface>& slot = (nurbs ? nurbs_ : exact_)[face_id - 1];
+  if (!slot) slot = MakeFaceSurface(model.face(face_id), nurbs);
+  return std::make_unique<LentSurface>(slot.get());
+}
 
 FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
                   const FaceJob& job, Context* context, std::vector<NodeRef>* refs) {
@@ -121,7 +151,8 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
   try {
     const TopoDS_Face& face = model.face(face_id);
     f.surface_type = FaceSurfaceType(face);
-    std::unique_ptr<Surface> surface = WithPointCache(MakeFaceSurface(face, job.nurbs));
+    std::unique_ptr<Surface> surface =
+        WithPointCache(FaceSurface(model, face_id, job.nurbs, job.surfaces));
     FaceDomain domain;
     Status st = BuildFaceDomain(model, face_id, grids, *surface, &domain);
     if (!st.ok()) return Failed(f, st.message());
@@ -191,7 +222,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
 
 FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
                    const std::vector<NodeRef>& rep_refs, const std::vector<EdgeGrid>& grids,
-                   std::vector<NodeRef>* refs) {
+                   std::vector<NodeRef>* refs, FaceSurfaces* surfaces) {
   FaceMesh f = rep;
   f.face_id = face_id;
   f.exact_area = model.face_area[face_id - 1];
@@ -201,10 +232,10 @@ FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
   try {
     // Boundary nodes: the copy's own domain lists them in the same order as the
     // representative's (same TShape), with its own exact points and ids.
-    std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), false);
+    std::unique_ptr<Surface> surface = FaceSurface(model, face_id, false, surfaces);
     FaceDomain mine, theirs;
     Status st = BuildFaceDomain(model, face_id, grids, *surface, &mine);
-    std::unique_ptr<Surface> rep_surface = MakeFaceSurface(model.face(rep_id), false);
+    std::unique_ptr<Surface> rep_surface = FaceSurface(model, rep_id, false, surfaces);
     if (st.ok()) st = BuildFaceDomain(model, rep_id, grids, *rep_surface, &theirs);
     if (!st.ok() || mine.uv.size() != theirs.uv.size())
       return Failed(f, "instance boundary differs");

@@ -2,6 +2,7 @@
 // One face, start to end: evaluator, (u,v) domain, constrained triangulation, refinement, and
 // the FaceMesh it hands to assembly. Faces are independent once the edge grids exist.
 
+#include <memory>
 #include <vector>
 
 #include "face_domain.h"
@@ -12,12 +13,31 @@
 namespace rdmesh {
 
 class Model;
+class Surface;
+
+/// Face evaluators made once and lent to several runs on one model (the levels of detail):
+/// MakeFaceSurface the first time a run asks for a face, a view of that same evaluator after.
+/// What an evaluator returns does not depend on what it evaluated before (its caches are exact),
+/// so a run meshes the same with a fresh or a lent one. One slot per face and kind (exact, or
+/// converted with --nurbs): the tasks of a run never ask for one face at once (one task per face).
+class FaceSurfaces {
+ public:
+  explicit FaceSurfaces(int face_count);
+  ~FaceSurfaces();
+  /// An evaluator of face `face_id` for one task; valid while this object lives.
+  std::unique_ptr<Surface> Lend(const Model& model, int face_id, bool nurbs);
+
+ private:
+  std::vector<std::unique_ptr<Surface>> exact_, nurbs_;
+};
 
 struct FaceJob {
   FaceCriteria criteria;
   int64_t max_triangles = 0;  ///< per-face safety cap
   bool nurbs = false;
   bool improve = true;  ///< run the collapse / flip / smooth loop after refinement
+  /// Evaluators shared with other runs on the model (levels of detail); null = made per face.
+  FaceSurfaces* surfaces = nullptr;
 };
 
 /// Meshes face `face_id` of the model. Never throws: OCCT failures and bad loops come back as a
@@ -30,6 +50,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
 /// the boundary rebuilt exactly from the copy's own edges.
 FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& representative,
                    const std::vector<NodeRef>& representative_refs,
-                   const std::vector<EdgeGrid>& grids, std::vector<NodeRef>* refs);
+                   const std::vector<EdgeGrid>& grids, std::vector<NodeRef>* refs,
+                   FaceSurfaces* surfaces = nullptr);
 
 }  // namespace rdmesh

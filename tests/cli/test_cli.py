@@ -12,7 +12,7 @@ FORMATS = [".msh", ".stl", ".obj", ".ply", ".vtu", ".glb"]
 MESH_OPTIONS = ["--max-deviation", "--max-deviation-rel", "--rd-tolerance", "--max-triangles",
                 "--min-edge-length", "--max-edge-length", "--nurbs", "--threads", "--faces",
                 "--timeout", "--strict", "--json", "--quiet", "--output", "--edges", "--no-edges",
-                "--msh-parametric"]
+                "--msh-parametric", "--lod"]
 JSON_FIELDS = ["triangles", "nodes", "seconds", "edge_seconds", "face_seconds", "load_seconds",
                "requested_deviation",
                "estimated_deviation", "mesh_area", "exact_area", "faces_ok", "faces_failed",

@@ -33,12 +33,6 @@
 namespace rdmesh {
 namespace {
 
-std::shared_ptr<const Model> LoadData(const std::string& file) {
-  auto model = LoadModel(std::string(RDMESH_TEST_DATA) + "/" + file);
-  EXPECT_TRUE(model.ok()) << model.status().ToString();
-  return model.ok() ? *model : nullptr;
-}
-
 MeshResult MeshOrDie(const Model& model, const MeshOptions& options) {
   auto result = MeshModel(model, options);
   EXPECT_TRUE(result.ok()) << result.status().ToString();

@@ -1,6 +1,7 @@
 #pragma once
 // Loads an in-memory OCCT shape through the engine's own reader (via a temporary .brep file), so
-// tests build B-reps with BRepBuilderAPI / BRepPrimAPI and mesh them like a user's file.
+// tests build B-reps with BRepBuilderAPI / BRepPrimAPI and mesh them like a user's file; and
+// loads the bundled models.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -22,6 +23,13 @@ inline std::shared_ptr<const Model> LoadShape(const TopoDS_Shape& shape, const s
   BRepTools::Write(shape, path.c_str());
   auto model = LoadModel(path);
   std::filesystem::remove(path);
+  EXPECT_TRUE(model.ok()) << model.status().ToString();
+  return model.ok() ? *model : nullptr;
+}
+
+/// Loads a bundled model (tests/data) by file name.
+inline std::shared_ptr<const Model> LoadData(const std::string& file) {
+  auto model = LoadModel(std::string(RDMESH_TEST_DATA) + "/" + file);
   EXPECT_TRUE(model.ok()) << model.status().ToString();
   return model.ok() ? *model : nullptr;
 }

@@ -147,16 +147,52 @@ def cmd_mesh(args):
             bar.total = p.total
             bar.n = p.done
             bar.refresh()
+    lod = None
+    if args.lod:
+        try:
+            lod = [float(v) for v in args.lod.split(",")]
+        except ValueError:
+            raise ValueError("--lod: give relative deviations like 1e-2,1e-3,1e-4") from None
     try:
         with _client(args) as client:
-            result = client.mesh(_model_ref(client, args), progress=progress,
-                                 timeout=args.timeout,
-                                 triangle_deviation=args.output.lower().endswith((".vtu", ".ply")),
-                                 **options)
+            deviation = args.output.lower().endswith((".vtu", ".ply"))
+            if lod:
+                results = client.mesh_levels(_model_ref(client, args), lod, progress=progress,
+                                             timeout=args.timeout, triangle_deviation=deviation,
+                                             **options)
+            else:
+                results = [client.mesh(_model_ref(client, args), progress=progress,
+                                       timeout=args.timeout, triangle_deviation=deviation,
+                                       **options)]
     finally:
         if bar is not None:
             bar.close()
-    write_mesh(args.output, result)
+    summaries = []
+    for result in results:
+        output = level_path(args.output, result.level) if lod else args.output
+        write_mesh(output, result)
+        summaries.append(_report(args, result, output, start))
+    if args.json:
+        if lod:
+            print(json.dumps({"levels": summaries}))
+        else:
+            print(json.dumps(summaries[0]))
+    for result in results:
+        for face in result.faces:
+            if face.status == "failed":
+                print("%sface %d failed: %s" % ("level %d: " % result.level if lod else "",
+                                                face.face_id, face.reason), file=sys.stderr)
+    return 0
+
+
+def level_path(output, level):
+    """Where level `level` of a --lod run goes: OUT.EXT -> OUT.lodN.EXT (N = 0 the coarsest)."""
+    root, ext = os.path.splitext(output)
+    return "%s.lod%d%s" % (root, level, ext)
+
+
+def _report(args, result, output, start):
+    """One mesh's summary (printed unless --json, returned as a dict)."""
     seconds = time.monotonic() - start
     s = result.summary
     summary = {
@@ -168,21 +204,18 @@ def cmd_mesh(args):
         "estimated_deviation": s.estimated_deviation,
         "mesh_area": s.mesh_area, "exact_area": s.exact_area,
         "server_seconds": s.total_seconds, "seconds": seconds,
-        "output": os.path.abspath(args.output),
+        "output": os.path.abspath(output),
     }
-    if args.json:
-        print(json.dumps(summary))
-    else:
+    if result.max_deviation_rel is not None:
+        summary.update(level=result.level, max_deviation_rel=result.max_deviation_rel)
+    if not args.json:
         print("%s: %d faces (%d ok, %d failed), %d triangles, %d nodes, %d open edges"
               % (summary["model"], summary["faces"], s.faces_ok, s.faces_failed,
                  summary["triangles"], summary["nodes"], summary["open_edges"]))
         print("deviation %.4g (asked %.4g), area %.6g of %.6g; %.2f s (server %.2f s) -> %s"
               % (s.estimated_deviation, s.requested_deviation, s.mesh_area, s.exact_area,
                  seconds, s.total_seconds, summary["output"]))
-    for face in result.faces:
-        if face.status == "failed":
-            print("face %d failed: %s" % (face.face_id, face.reason), file=sys.stderr)
-    return 0
+    return summary
 
 
 def cmd_view(args):
@@ -241,6 +274,10 @@ def parser():
     mesh.add_argument("--nurbs", action="store_true", help="convert faces to B-splines first")
     mesh.add_argument("--threads", type=int, help="worker threads (capped by the server)")
     mesh.add_argument("--faces", help="comma-separated face ids to mesh (default all)")
+    mesh.add_argument("--lod",
+                      help="levels of detail: relative deviations, e.g. 1e-2,1e-3,1e-4; one "
+                           "call, the model read once, each level written to OUT.lodN.EXT "
+                           "(N = 0 the coarsest)")
     mesh.add_argument("--no-progress", action="store_true", help="no progress bar")
     mesh.add_argument("--json", action="store_true", help="print the summary as one JSON line")
 

@@ -153,6 +153,8 @@ class MeshResult:
     # (T,) float64 per assembled triangle, when asked for (mesh(..., triangle_deviation=True)):
     # the engine's estimated triangle-surface distance, model units
     triangle_deviation: Optional[np.ndarray] = None
+    level: int = 0  # the level of detail (mesh_levels(); 0 coarsest), 0 for mesh()
+    max_deviation_rel: Optional[float] = None  # the level's relative deviation (mesh_levels())
 
     @property
     def triangle_count(self):
@@ -290,13 +292,41 @@ class Client:
             model, lambda m: self._call(self._stub.GetModelInfo, m.ref, timeout, m.key), timeout)
 
     def mesh_stream(self, model, uv=False, normals=False, timeout=None, edges=False,
-                    triangle_deviation=False, **options):
+                    triangle_deviation=False, lod=None, **options):
         """The raw Mesh call: an iterator of MeshEvent messages that also has cancel(). A local
-        file is uploaded first (a stream cannot be retried after NOT_FOUND)."""
+        file is uploaded first (a stream cannot be retried after NOT_FOUND). `lod`: relative
+        deviations of levels of detail (MeshRequest.lod_deviation_rel)."""
         m = self._model(model)
         if m.data is not None:
             self._upload_model(m, timeout)
-        return self._mesh_call(m, uv, normals, timeout, options, edges, triangle_deviation)
+        return self._mesh_call(m, uv, normals, timeout, options, edges,
+                               triangle_deviation, lod)
+
+    def mesh_levels(self, model, lod, progress: Optional[Callable[[Progress], None]] = None,
+                    level_done: Optional[Callable[["MeshResult"], None]] = None, uv=False,
+                    normals=False, timeout=None, edges=False, triangle_deviation=False,
+                    **options) -> List["MeshResult"]:
+        """Levels of detail in one call: `lod` holds relative deviations (fractions of the bbox
+        diagonal, as max_deviation_rel, in any order, at most 8). The server reads the model
+        once and meshes it once per level, coarsest first; each level is a whole watertight
+        mesh equal to mesh(model, max_deviation_rel=level, **options). Returns the levels'
+        MeshResults, coarsest first (MeshResult.level, .max_deviation_rel); `level_done` is
+        called with each one as soon as its last event arrives, so a viewer can show the coarse
+        mesh while the finer ones are meshed. Other arguments as mesh() (no max_deviation,
+        max_deviation_rel or max_triangles)."""
+        mesh_options(**options)
+        lod = [float(v) for v in lod]
+        if not lod:
+            raise ValueError("lod: give at least one relative deviation")
+        results = self._with_model(
+            model, lambda m: self._collect_levels(
+                self._mesh_call(m, uv, normals, timeout, options, edges, triangle_deviation,
+                                lod), progress, edges,
+                level_done), timeout)
+        if len(results) != len(lod):
+            raise RdmeshError(grpc.StatusCode.INTERNAL, "%d levels asked for, %d received"
+                              % (len(lod), len(results)))
+        return results
 
     def mesh(self, model, progress: Optional[Callable[[Progress], None]] = None, uv=False,
              normals=False, timeout=None, edges=False, triangle_deviation=False,
@@ -319,62 +349,46 @@ class Client:
 
     def _collect(self, call, progress, edges=False):
         """Reads a Mesh stream into a MeshResult."""
-        edge_parts = _EdgeParts()
-        started = summary = None
-        parts: Dict[int, _FaceParts] = {}
-        faces: Dict[int, FaceResult] = {}
-        ids: Dict[int, list] = {}
+        results = self._collect_levels(call, progress, edges, None, levels=False)
+        return results[0]
+
+    def _collect_levels(self, call, progress, edges, level_done, levels=True):
+        """Reads a Mesh stream into MeshResults: one, or one per level of detail (LevelStarted
+        events), each finished when its Summary arrives."""
+        started = None
+        results = []
+        level = _LevelEvents(progress)
         largest = 0
-        faces_done = 0
         try:
             for event in call:
                 largest = max(largest, event.ByteSize())
                 kind = event.WhichOneof("event")
                 if kind == "started":
                     started = event.started
-                elif kind == "progress" and progress:
-                    p = event.progress
-                    stage = _STAGES.get(p.stage, "unspecified")
-                    if stage == "faces":
-                        faces_done = max(faces_done, p.done)
-                        progress(Progress(stage, faces_done, p.total))
-                    else:
-                        progress(Progress(stage, p.done, p.total))
-                elif kind == "face":
-                    part = event.face
-                    collector = parts.setdefault(part.face_id, _FaceParts(part))
-                    if collector.add(part):
-                        faces[part.face_id] = parts.pop(part.face_id).result()
-                        if progress and started is not None:
-                            faces_done = max(faces_done, len(faces))
-                            progress(Progress("faces", faces_done, started.faces_requested))
-                elif kind == "node_ids":
-                    chunk = event.node_ids
-                    ids.setdefault(chunk.face_id, []).append(
-                        np.array(chunk.global_ids, dtype=np.int64))
-                elif kind == "edge":
-                    edge_parts.add(event.edge)
+                elif kind == "level_started":
+                    if (event.level_started.level != len(results) or level.summary is not None
+                            or level.parts or level.faces):
+                        raise RdmeshError(grpc.StatusCode.INTERNAL,
+                                          "level %d arrived out of order"
+                                          % event.level_started.level)
+                    level.info = event.level_started
                 elif kind == "summary":
-                    summary = event.summary
+                    level.summary = event.summary
+                    if levels:
+                        result = level.result(started, edges, largest)
+                        results.append(result)
+                        if level_done:
+                            level_done(result)
+                        level = _LevelEvents(progress)
+                else:
+                    level.add(kind, event, started)
         except grpc.RpcError as error:
             raise RdmeshError.wrap(error) from None
-        if started is None or summary is None or parts:
+        if not levels:
+            return [level.result(started, edges, largest)]
+        if not results or level.parts or level.faces or level.info is not None:
             raise RdmeshError(grpc.StatusCode.INTERNAL, "the Mesh stream ended early")
-        ordered = [faces[k] for k in sorted(faces)]
-        for face in ordered:
-            if face.face_id in ids:
-                face.global_ids = np.concatenate(ids[face.face_id])
-            if face.status == "ok" and len(face.global_ids) != len(face.xyz):
-                raise RdmeshError(grpc.StatusCode.INTERNAL,
-                                  "face %d: %d global ids for %d nodes"
-                                  % (face.face_id, len(face.global_ids), len(face.xyz)))
-        xyz, triangles, triangle_face, deviation = assemble(ordered, summary.nodes, True)
-        return MeshResult(model=started.model, options=started.options, summary=summary,
-                          faces=ordered, xyz=xyz, triangles=triangles,
-                          triangle_face=triangle_face, job_id=started.job_id,
-                          largest_message=largest,
-                          edges=edge_parts.result() if edges else None,
-                          triangle_deviation=deviation)
+        return results
 
     def _metadata_for(self, key):
         return self._metadata + [(MODEL_HEADER, key)] if key else self._metadata
@@ -385,11 +399,12 @@ class Client:
         except grpc.RpcError as error:
             raise RdmeshError.wrap(error) from None
 
-    def _mesh_call(self, m, uv, normals, timeout, options, edges=False, triangle_deviation=False):
+    def _mesh_call(self, m, uv, normals, timeout, options, edges=False, triangle_deviation=False,
+                   lod=None):
         fields = pb.ReturnFields(uv=uv, normals=normals, edges=edges,
                                  triangle_deviation=triangle_deviation)
         request = pb.MeshRequest(model=m.ref, options=mesh_options(**options),
-                                 return_fields=fields)
+                                 return_fields=fields, lod_deviation_rel=lod or [])
         return self._stub.Mesh(request, timeout=timeout, metadata=self._metadata_for(m.key))
 
     def _upload(self, data, name, key, path, timeout, chunk_bytes=CHUNK_BYTES):
@@ -452,6 +467,68 @@ class Client:
             key = model_key(data)
             return _Model(pb.ModelRef(model_id=key), key, path=path, data=data)
         raise TypeError("model must be a path, bytes, a model id, a ModelInfo or a ModelRef")
+
+
+class _LevelEvents:
+    """The events of one mesh (one level of detail, or the only mesh) until its Summary."""
+
+    def __init__(self, progress):
+        self.progress = progress
+        self.edge_parts = _EdgeParts()
+        self.parts: Dict[int, _FaceParts] = {}
+        self.faces: Dict[int, FaceResult] = {}
+        self.ids: Dict[int, list] = {}
+        self.faces_done = 0
+        self.info = None  # LevelStarted
+        self.summary = None
+
+    def add(self, kind, event, started):
+        progress = self.progress
+        if kind == "progress" and progress:
+            p = event.progress
+            stage = _STAGES.get(p.stage, "unspecified")
+            if stage == "faces":
+                self.faces_done = max(self.faces_done, p.done)
+                progress(Progress(stage, self.faces_done, p.total))
+            else:
+                progress(Progress(stage, p.done, p.total))
+        elif kind == "face":
+            part = event.face
+            collector = self.parts.setdefault(part.face_id, _FaceParts(part))
+            if collector.add(part):
+                self.faces[part.face_id] = self.parts.pop(part.face_id).result()
+                if progress and started is not None:
+                    self.faces_done = max(self.faces_done, len(self.faces))
+                    progress(Progress("faces", self.faces_done, started.faces_requested))
+        elif kind == "node_ids":
+            chunk = event.node_ids
+            self.ids.setdefault(chunk.face_id, []).append(
+                np.array(chunk.global_ids, dtype=np.int64))
+        elif kind == "edge":
+            self.edge_parts.add(event.edge)
+
+    def result(self, started, edges, largest):
+        summary = self.summary
+        if started is None or summary is None or self.parts:
+            raise RdmeshError(grpc.StatusCode.INTERNAL, "the Mesh stream ended early")
+        ordered = [self.faces[k] for k in sorted(self.faces)]
+        for face in ordered:
+            if face.face_id in self.ids:
+                face.global_ids = np.concatenate(self.ids[face.face_id])
+            if face.status == "ok" and len(face.global_ids) != len(face.xyz):
+                raise RdmeshError(grpc.StatusCode.INTERNAL,
+                                  "face %d: %d global ids for %d nodes"
+                                  % (face.face_id, len(face.global_ids), len(face.xyz)))
+        xyz, triangles, triangle_face, deviation = assemble(ordered, summary.nodes, True)
+        info = self.info
+        return MeshResult(model=started.model, options=started.options, summary=summary,
+                          faces=ordered, xyz=xyz, triangles=triangles,
+                          triangle_face=triangle_face, job_id=started.job_id,
+                          largest_message=largest,
+                          edges=self.edge_parts.result() if edges else None,
+                          triangle_deviation=deviation,
+                          level=info.level if info is not None else 0,
+                          max_deviation_rel=info.max_deviation_rel if info is not None else None)
 
 
 def mesh_options(**options) -> "pb.MeshOptions":

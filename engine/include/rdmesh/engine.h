@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -60,6 +61,38 @@ ModelInfo GetModelInfo(const Model& model);
 /// Thread-safe: one Model may be meshed by several calls at once.
 Result<MeshResult> MeshModel(const Model& model, const MeshOptions& options,
                              Context* context = nullptr);
+
+/// Levels of detail (`rdmesh mesh --lod`, MeshRequest.lod_deviation_rel): at most this many.
+inline constexpr int kMaxLevels = 8;
+
+/// The levels of a levels-of-detail run from relative deviations (fractions of the bbox diagonal,
+/// as MeshOptions::max_deviation_rel), in any order: sorted coarsest first (level 0 = the largest
+/// deviation). kInvalidArgument when there are none, more than kMaxLevels, two equal ones, one
+/// out of max_deviation_rel's range or > 0 smaller than 1e-7, or when `options` asks for an
+/// absolute max_deviation or a max_triangles budget (each level is a relative deviation).
+Result<std::vector<double>> ResolveLevels(std::vector<double> levels_rel,
+                                          const MeshOptions& options);
+
+/// One level's options: `options` with max_deviation 0 and max_deviation_rel = `level_rel`. The
+/// level's mesh is the mesh of a single MeshModel run with these options, bit for bit.
+MeshOptions LevelOptions(const MeshOptions& options, double level_rel);
+
+/// What MeshModelLevels reports, from the calling thread, one level after the other.
+struct LevelCallbacks {
+  /// Before level `level` starts (its faces then reach the Context's face callback).
+  std::function<void(int level)> started;
+  /// Level `level`'s result, as MeshModel returns it. A non-ok Status stops the run with it.
+  std::function<Status(int level, MeshResult result)> done;
+};
+
+/// Meshes one loaded model once per level, coarsest first: level i is
+/// MeshModel(model, LevelOptions(options, levels_rel[i]), context). `levels_rel` as
+/// ResolveLevels returns it. The context's deadline and cancellation cover the whole run
+/// (options.timeout_seconds counts from the first level). Returns the first error (of a run or
+/// of `done`), or ok after the last level's `done`.
+Status MeshModelLevels(const Model& model, const MeshOptions& options,
+                       const std::vector<double>& levels_rel, Context* context,
+                       const LevelCallbacks& callbacks);
 
 /// How WriteMesh writes; every field has a usable default.
 struct WriteOptions {
