@@ -127,14 +127,19 @@ std::string Scan(std::string_view text, bool strings) {
       size_t equals = Skip(text, digits_end, IsSpace);
       if (digits_end == i + 1 || equals >= text.size() || text[equals] != '=') continue;
       const long id = EntityId(text.substr(i + 1, digits_end - i - 1));
+      size_t keyword = Skip(text, equals + 1, IsSpace);
+      size_t keyword_end = Skip(
+          text, keyword < text.size() && text[keyword] == '!' ? keyword + 1 : keyword, IsKeyword);
+      std::string_view name = text.substr(keyword, keyword_end - keyword);
+      // OCCT's parser drops a record that is not "KEYWORD (" or a complex "(": its id stays
+      // undefined, and a reference to it lands elsewhere (seen as "#210 = EDG,_CURVE(...)").
+      const size_t open = Skip(text, keyword_end, IsSpace);
+      const bool record = open < text.size() && text[open] == '(';
       // A broken string can hide a definition from the first pass, so both passes count
       // duplicates; read as code, the text of a comment is no definition.
-      if (i >= comment_end && !defined.insert(id).second) {
+      if (record && i >= comment_end && !defined.insert(id).second) {
         return "entity #" + std::to_string(id) + " is defined more than once";
       }
-      size_t keyword = Skip(text, equals + 1, IsSpace);
-      size_t keyword_end = Skip(text, keyword, IsKeyword);
-      std::string_view name = text.substr(keyword, keyword_end - keyword);
       if (name == "ORIENTED_EDGE") oriented_edge = EntityId(text.substr(i + 1, digits_end - i - 1));
       in_point = name == "CARTESIAN_POINT";
       i = keyword_end - 1;

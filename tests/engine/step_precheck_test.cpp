@@ -69,6 +69,12 @@ TEST(StepPrecheckTest, RefusesOrientedEdgeOfUndefinedEdge) {
   ASSERT_NE(at, std::string::npos);
   EXPECT_EQ(StepCrashReason(std::string(bytes).erase(at, edge.size())),
             "ORIENTED_EDGE #146 names #210 as its edge_element, and the file does not define it");
+  // A record OCCT's parser drops ("KEYWORD," instead of "KEYWORD(") defines nothing: found by
+  // CI's scripts/fuzz_smoke.sh (tests/data/fuzz/crash_reader_malformed_keyword.step).
+  std::string malformed = bytes;
+  malformed.replace(at, 12, "#210 = EDG,_");
+  EXPECT_EQ(StepCrashReason(malformed),
+            "ORIENTED_EDGE #146 names #210 as its edge_element, and the file does not define it");
   // Defined further on, or as a complex instance: fine.
   std::string moved = std::string(bytes).erase(at, edge.size());
   moved.replace(moved.find("ENDSEC;", moved.find("DATA;")), 0,
