@@ -42,6 +42,12 @@ double TriangleArea(const FaceMesh& f, int t) {
 void Extract(const WorkMesh& m, const std::vector<double>& deviation, bool reversed, FaceMesh* f,
              std::vector<NodeRef>* refs) {
   std::vector<int> index(m.node_count(), -1);
+  f->xyz.reserve(3 * m.node_count());
+  f->uv.reserve(2 * m.node_count());
+  f->normals.reserve(3 * m.node_count());
+  refs->reserve(m.node_count());
+  f->triangles.reserve(3 * m.tri.size());
+  f->triangle_deviation.reserve(m.tri.size());
   for (int t = 0; t < static_cast<int>(m.tri.size()); ++t) {
     if (!m.alive[t]) continue;
     const Tri& x = m.tri[t];
@@ -169,17 +175,27 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     st = ConstrainedTriangulation(points, domain.segments, context, &cdt);
     if (context && context->ShouldStop()) return Stopped(f, *context);
     if (!st.ok()) return Failed(f, st.message());
+    // Between here and refinement, a face of 10^5 boundary nodes (absurd options) spends seconds
+    // under a sanitizer: poll every few thousand nodes and after each step.
+    auto stop_every = [context](size_t i) {
+      return (i & 4095) == 4095 && context && context->ShouldStop();
+    };
     WorkMesh m;
     for (size_t i = 0; i < domain.uv.size(); ++i) {
       const Vec2& q = domain.uv[i];
       m.AddNode(q, domain.xyz[i], surface->Normal(q.x, q.y), true, domain.ref[i]);
+      if (stop_every(i)) return Stopped(f, *context);
     }
-    for (const Vec2& q : seeds)
+    for (size_t i = 0; i < seeds.size(); ++i) {
+      const Vec2& q = seeds[i];
       m.AddNode(q, surface->Point(q.x, q.y), surface->Normal(q.x, q.y), false, NodeRef{});
+      if (stop_every(i)) return Stopped(f, *context);
+    }
     std::vector<std::array<int, 2>> splittable;
     for (size_t s = 0; s < domain.segments.size(); ++s)
       if (domain.segment_splittable[s]) splittable.push_back(domain.segments[s]);
     InitWorkMesh(cdt.triangles, cdt.constrained, splittable, &m);
+    if (context && context->ShouldStop()) return Stopped(f, *context);
     // A first triangulation that folds is usually refined out of it; where refinement stays
     // stuck (criteria missed), the face is refined again from the unfolded triangulation and the
     // better result kept.
@@ -199,8 +215,10 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
       f.reason = st.message();
       return f;
     }
+    if (context && context->ShouldStop()) return Stopped(f, *context);
     Extract(m, stats.deviation, face.Orientation() == TopAbs_REVERSED, &f, refs);
     if (f.triangles.empty()) return Failed(f, "no triangles survived");
+    if (context && context->ShouldStop()) return Stopped(f, *context);
     if (!job.nurbs) ExactPoleNormals(face, *refs, &f);
     f.max_deviation = stats.max_deviation;
     f.status = FaceStatus::kOk;

@@ -116,30 +116,45 @@ void InitWorkMesh(const std::vector<std::array<int, 3>>& triangles,
   m->kind.assign(nt, {EdgeKind::kFree, EdgeKind::kFree, EdgeKind::kFree});
   m->alive.assign(nt, 1);
   m->free_slots.clear();
-  std::map<std::pair<int, int>, std::pair<int, int>> edges;  // directed edge -> (tri, corner)
+  // Directed edges (a, b, triangle), sorted: a face of 10^5 boundary nodes makes a few 10^5 of
+  // them, which a map allocates one by one. Where a directed edge repeats, the last triangle
+  // counts.
+  std::vector<std::array<int, 3>> edges;
+  edges.reserve(3 * static_cast<size_t>(nt));
   for (int t = 0; t < nt; ++t) {
     for (int i = 0; i < 3; ++i) {
-      int a = triangles[t][(i + 1) % 3], b = triangles[t][(i + 2) % 3];
-      edges[{a, b}] = {t, i};
+      edges.push_back({triangles[t][(i + 1) % 3], triangles[t][(i + 2) % 3], t});
       m->node_tri[triangles[t][i]] = t;
     }
   }
+  std::sort(edges.begin(), edges.end());
+  // The triangle holding directed edge a->b, or -1.
+  auto triangle_of = [&edges](int a, int b) {
+    auto it = std::lower_bound(edges.begin(), edges.end(), std::array<int, 3>{a, b + 1, 0});
+    return it == edges.begin() || (*(it - 1))[0] != a || (*(it - 1))[1] != b ? -1 : (*(it - 1))[2];
+  };
   for (const auto& s : splittable_segments) {
     Vec2 d = m->uv[s[1]] - m->uv[s[0]];
     int8_t axis = std::fabs(d.x) >= std::fabs(d.y) ? 0 : 1;
     m->pole_axis[s[0]] = m->pole_axis[s[1]] = axis;
   }
+  // Splittable segments as sorted (low, high) node pairs: a face with 10^5 boundary nodes asks
+  // this for every boundary edge.
+  std::vector<std::pair<int, int>> splittable;
+  splittable.reserve(splittable_segments.size());
+  for (const auto& s : splittable_segments)
+    splittable.push_back({std::min(s[0], s[1]), std::max(s[0], s[1])});
+  std::sort(splittable.begin(), splittable.end());
   auto is_splittable = [&](int a, int b) {
-    for (const auto& s : splittable_segments)
-      if ((s[0] == a && s[1] == b) || (s[0] == b && s[1] == a)) return true;
-    return false;
+    return std::binary_search(splittable.begin(), splittable.end(),
+                              std::make_pair(std::min(a, b), std::max(a, b)));
   };
   for (int t = 0; t < nt; ++t) {
     for (int i = 0; i < 3; ++i) {
       int a = triangles[t][(i + 1) % 3], b = triangles[t][(i + 2) % 3];
-      auto it = edges.find({b, a});
-      if (it != edges.end()) m->nbr[t][i] = it->second.first;
-      if (constrained[t][i] || it == edges.end())
+      const int other = triangle_of(b, a);
+      if (other >= 0) m->nbr[t][i] = other;
+      if (constrained[t][i] || other < 0)
         m->kind[t][i] = is_splittable(a, b) ? EdgeKind::kSplittable : EdgeKind::kFixed;
     }
   }
