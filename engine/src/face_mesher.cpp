@@ -147,6 +147,9 @@ std::unique_ptr<Surface> FaceSurfaces::Lend(const Model& model, int face_id, boo
   return std::make_unique<LentSurface>(slot.get());
 }
 
+// How many times a face left over its criteria is refined again from its own result.
+constexpr int kStuckRetries = 2;
+
 FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
                   const FaceJob& job, Context* context, std::vector<NodeRef>* refs) {
   auto t0 = std::chrono::steady_clock::now();
@@ -209,6 +212,19 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
       st = RefineFace(&first, *surface, job.criteria, domain.scale_u, domain.scale_v,
                       job.max_triangles, job.improve, context, &again);
       if (st.ok() && again.max_violation < stats.max_violation) m = std::move(first), stats = again;
+    }
+    // Still over the criteria: refine the result again. A fresh refiner counts every triangle as
+    // a first generation, whose splits may fold children (kFoldingGenerations), which frees
+    // splits that the fold guard blocked. Kept only while it lowers the worst violation.
+    for (int round = 0;
+         round < kStuckRetries && st.ok() && stats.max_violation > 1.0 + 1e-9 && !stats.budget_hit;
+         ++round) {
+      WorkMesh again_mesh = m;
+      RefineStats again;
+      st = RefineFace(&again_mesh, *surface, job.criteria, domain.scale_u, domain.scale_v,
+                      job.max_triangles, job.improve, context, &again);
+      if (!st.ok() || !(again.max_violation < stats.max_violation)) break;
+      m = std::move(again_mesh), stats = again;
     }
     if (!st.ok()) {
       f.status = FaceStatus::kSkipped;

@@ -373,3 +373,22 @@ def test_msh_parametric_round_trips_the_parameters(run, data_dir, tmp_path):
     assert len(all_tags) == len(mesh.points)
     assert sorted(map(tuple, coords.reshape(-1, 3).tolist())) == sorted(
         map(tuple, mesh.points.tolist()))
+
+
+def test_stuck_face_is_refined_again(run, shared_dir, tmp_path, meshbench):
+    """gmsh_periodic_u_cst at 1e-4: refinement left its B-spline faces over the criteria (the
+    fold guard blocked the splits; estimated and measured 3.0x the request). A face still over
+    them is refined again from its own result, so the request is met, by the engine's estimate
+    and by the yardstick. Skipped only without the shared corpus."""
+    model = shared_dir / "corpus" / "gmsh_periodic_u_cst.step"
+    if not model.exists():
+        pytest.skip(f"{model} is not there (the shared corpus)")
+    output = tmp_path / "periodic.msh"
+    result = run("mesh", model, "-o", output, "--json", "--max-deviation-rel", "1e-4")
+    assert result.code == 0, result.stderr
+    report = result.json
+    assert [f["reason"] for f in report["faces"]] == ["", "", ""]
+    assert report["estimated_deviation"] <= report["requested_deviation"]
+    score = meshbench(model, output)
+    assert score["hausdorff_rel"] <= 1.05e-4
+    assert score["free_edges"] == 0 and score["inverted"] == 0
