@@ -60,7 +60,7 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   std::vector<Tri> old_tris;
   std::vector<TriangleMeasure> old_measures;
   for (int t : choice.cavity) old_tris.push_back(m_.tri[t]), old_measures.push_back(measure_[t]);
-  std::vector<int> ids = Apply(choice.cavity, choice.tris, choice.cand);
+  std::vector<int> ids = Apply(choice.cavity, choice.tris, choice.cand, Phase::kImprove);
   m_.node_tri[v] = -1;
   if (choice.cand.max_violation <= 1.0) {
     if (!m_.fixed[w]) SmoothNode(w);
@@ -99,7 +99,7 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   for (size_t k = 0; k < region.size(); ++k) measure_[region[k]] = region_measures[k];
   Candidate back;
   back.measures = old_measures;
-  Apply(ids, old_tris, back);  // undo the collapse
+  Apply(ids, old_tris, back, Phase::kImprove);  // undo the collapse
   return false;
 }
 
@@ -150,7 +150,7 @@ int Refiner::FlipPass() {
     for (int i = 0; i < 3; ++i) {
       if (!m_.alive[t]) break;
       int u = m_.nbr[t][i];
-      if (u > t && TryFlip(t, i)) ++count;
+      if (u > t && TryFlip(t, i, Phase::kImprove)) ++count;
     }
   }
   return count;

@@ -29,7 +29,6 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
   measure_.resize(m_.tri.size());
   stamp_.assign(m_.tri.size(), 0);
   gen_.assign(m_.tri.size(), 0);
-  refining_ = true;
   for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
     if ((t & 255) == 255 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
     if (!m_.alive[t]) continue;
@@ -44,8 +43,9 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
   // Plain splits first; then the triangles they left violating get splits with flips too
   // (RescueSplit), which only they need.
   for (int phase = 0; phase < 2 && !stats_.budget_hit; ++phase) {
-    rescue_ = phase == 1;
-    if (rescue_)
+    SplitMode mode;
+    mode.rescue = phase == 1;
+    if (mode.rescue)
       for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t)
         if (m_.alive[t] && measure_[t].violation > 1) Push(t);
     while (!queue_.empty()) {
@@ -60,14 +60,10 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
       if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
       // No progress here: leave it; Finish() reports it through max_violation.
       if (gen_[t] >= kMaxGeneration) continue;
-      splitting_ = true;
-      SplitTriangle(t);
-      splitting_ = false;
+      SplitTriangle(t, mode);
     }
     queue_ = {};
   }
-  rescue_ = false;
-  refining_ = false;
   return Status::Ok();
 }
 
@@ -87,25 +83,34 @@ bool Refiner::RealignPole(int p) {
     if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return undo();
   Candidate cand = Evaluate(tris);
   if (!(cand.min_agreement > 0)) return undo();
-  Apply(cavity, tris, cand);
+  Apply(cavity, tris, cand, Phase::kRefine);
   bool used = false;
   for (const Tri& nt : tris) used = used || nt[0] == p || nt[1] == p || nt[2] == p;
   if (!used) m_.node_tri[p] = -1;
   return true;
 }
 
-bool Refiner::SplitTriangle(int t) {
+bool Refiner::SplitTriangle(int t, SplitMode mode) {
+  if (RealignPoleFan(t)) return true;
+  Vec2 uv[3];
+  Vec3 p[3], n[3];
+  m_.FoldCorners(m_.tri[t], uv, p, n);
+  return SplitForLength(t, p, mode) || SplitSliver(t, p, mode) ||
+         SplitAtAreaOptimum(t, uv, p, mode) || SplitAnyEdge(t, p, mode);
+}
+
+// A fan triangle at a pole first gets a pole node of its own under it.
+bool Refiner::RealignPoleFan(int t) {
   const Tri tri = m_.tri[t];
-  // A fan triangle at a pole first gets a pole node of its own under it.
   int poles = 0, pole = -1;
   for (int i = 0; i < 3; ++i)
     if (m_.pole_axis[tri[i]] >= 0) ++poles, pole = tri[i];
-  if (poles == 1 && RealignPole(pole)) return true;
-  Vec2 uv[3];
-  Vec3 p[3], n[3];
-  m_.FoldCorners(tri, uv, p, n);
+  return poles == 1 && RealignPole(pole);
+}
+
+// A triangle too long for max_length: split its longest edge in the middle when allowed.
+bool Refiner::SplitForLength(int t, const Vec3 p[3], SplitMode mode) {
   const TriangleMeasure& mt = measure_[t];
-  // A triangle too long for max_length: split its longest edge in the middle when allowed.
   double dev_ratio = c_.max_deviation > 0 ? mt.deviation / c_.max_deviation : 0;
   double rd_ratio = c_.rd_tolerance > 0 ? mt.rd / c_.rd_tolerance : 0;
   if (c_.max_length > 0 && mt.max_length / c_.max_length >= std::max(dev_ratio, rd_ratio)) {
@@ -115,36 +120,43 @@ bool Refiner::SplitTriangle(int t) {
       double l = Dist(p[(i + 1) % 3], p[(i + 2) % 3]);
       if (l > best) best = l, longest = i;
     }
-    if (m_.kind[t][longest] != EdgeKind::kFixed && SplitEdge(t, longest)) return true;
+    if (m_.kind[t][longest] != EdgeKind::kFixed && SplitEdge(t, longest, mode)) return true;
   }
-  // A sliver (two corners almost together) gains nothing from an interior point: its long edges
-  // carry the deviation, so bisect the longest one (Rivara) when it may be split.
-  {
-    double l2[3], sum = 0;
-    for (int i = 0; i < 3; ++i)
-      l2[i] = Dot(p[(i + 1) % 3] - p[(i + 2) % 3], p[(i + 1) % 3] - p[(i + 2) % 3]), sum += l2[i];
-    double quality = sum > 0 ? 4 * std::sqrt(3.0) * Area(p[0], p[1], p[2]) / sum : 1;
-    int longest = static_cast<int>(std::max_element(l2, l2 + 3) - l2);
-    if (quality < kSliverQuality &&
-        m_.pole_axis[tri[0]] + m_.pole_axis[tri[1]] + m_.pole_axis[tri[2]] == -3 &&
-        m_.kind[t][longest] != EdgeKind::kFixed) {
-      if (SplitEdge(t, longest)) return true;
-      // The neighbour across the long edge blocks it (the split would fold it): refine the
-      // neighbour first, then this sliver again.
-      int u = m_.nbr[t][longest];
-      if (u >= 0 && !sliver_recursion_) {
-        sliver_recursion_ = true;
-        bool done = SplitTriangle(u);
-        sliver_recursion_ = false;
-        if (done) {
-          if (m_.alive[t]) Push(t);
-          return true;
-        }
+  return false;
+}
+
+// A sliver (two corners almost together) gains nothing from an interior point: its long edges
+// carry the deviation, so bisect the longest one (Rivara) when it may be split.
+bool Refiner::SplitSliver(int t, const Vec3 p[3], SplitMode mode) {
+  const Tri tri = m_.tri[t];
+  double l2[3], sum = 0;
+  for (int i = 0; i < 3; ++i)
+    l2[i] = Dot(p[(i + 1) % 3] - p[(i + 2) % 3], p[(i + 1) % 3] - p[(i + 2) % 3]), sum += l2[i];
+  double quality = sum > 0 ? 4 * std::sqrt(3.0) * Area(p[0], p[1], p[2]) / sum : 1;
+  int longest = static_cast<int>(std::max_element(l2, l2 + 3) - l2);
+  if (quality < kSliverQuality &&
+      m_.pole_axis[tri[0]] + m_.pole_axis[tri[1]] + m_.pole_axis[tri[2]] == -3 &&
+      m_.kind[t][longest] != EdgeKind::kFixed) {
+    if (SplitEdge(t, longest, mode)) return true;
+    // The neighbour across the long edge blocks it (the split would fold it): refine the
+    // neighbour first, then this sliver again.
+    int u = m_.nbr[t][longest];
+    if (u >= 0 && !mode.for_sliver) {
+      SplitMode neighbour = mode;
+      neighbour.for_sliver = true;
+      if (SplitTriangle(u, neighbour)) {
+        if (m_.alive[t]) Push(t);
+        return true;
       }
     }
   }
-  // The area-optimal interior point (the paper's Algorithm 1), searched in barycentric
-  // coordinates from where the deviation peaks.
+  return false;
+}
+
+// The area-optimal interior point (the paper's Algorithm 1), searched in barycentric
+// coordinates from where the deviation peaks; an optimum near an edge splits that edge.
+bool Refiner::SplitAtAreaOptimum(int t, const Vec2 uv[3], const Vec3 p[3], SplitMode mode) {
+  const TriangleMeasure& mt = measure_[t];
   auto to_uv = [&](Vec2 b) { return (1 - b.x - b.y) * uv[0] + (b.x * uv[1] + b.y * uv[2]); };
   double det = Orient(uv[0], uv[1], uv[2]);
   Vec2 b0{1.0 / 3, 1.0 / 3};
@@ -170,7 +182,7 @@ bool Refiner::SplitTriangle(int t) {
   if (w[k] < kEdgeWeight) {
     // Split the nearby edge, unless it is a short one (that would only make slivers).
     double edge = Dist(p[(k + 1) % 3], p[(k + 2) % 3]);
-    if (m_.kind[t][k] != EdgeKind::kFixed && edge >= 0.3 * mt.max_length && SplitEdge(t, k))
+    if (m_.kind[t][k] != EdgeKind::kFixed && edge >= 0.3 * mt.max_length && SplitEdge(t, k, mode))
       return true;
     b = clamp_weights(b, kEdgeWeight);
   }
@@ -188,23 +200,28 @@ bool Refiner::SplitTriangle(int t) {
     std::vector<Tri> tris = SplitTriangleTris(m_, t, node);
     Candidate cand = Evaluate(tris);
     if (SplitOk(cand.min_agreement, cavity) ||
-        (rescue_ && RescueSplit(node, &cavity, &tris, &cand))) {
-      Apply(cavity, tris, cand);
+        (mode.rescue && RescueSplit(node, &cavity, &tris, &cand))) {
+      Apply(cavity, tris, cand, Phase::kRefine);
       ++stats_.splits;
       Legalize(node);
       return true;
     }
     DropLastNode();
   }
-  // Neither point keeps the children unfolded: try its edges before giving up on it.
+  return false;
+}
+
+// No interior point keeps the children unfolded: try the triangle's edges before giving up.
+bool Refiner::SplitAnyEdge(int t, const Vec3 p[3], SplitMode mode) {
+  const TriangleMeasure& mt = measure_[t];
   for (int i = 0; i < 3; ++i)
     if (m_.kind[t][i] != EdgeKind::kFixed &&
-        Dist(p[(i + 1) % 3], p[(i + 2) % 3]) >= 0.3 * mt.max_length && SplitEdge(t, i))
+        Dist(p[(i + 1) % 3], p[(i + 2) % 3]) >= 0.3 * mt.max_length && SplitEdge(t, i, mode))
       return true;
   return false;
 }
 
-bool Refiner::SplitEdge(int t, int i) {
+bool Refiner::SplitEdge(int t, int i, SplitMode mode) {
   const int b = m_.tri[t][(i + 1) % 3], c = m_.tri[t][(i + 2) % 3];
   const bool pole = m_.kind[t][i] == EdgeKind::kSplittable;
   std::vector<int> cavity;
@@ -243,11 +260,11 @@ bool Refiner::SplitEdge(int t, int i) {
   SplitEdgeTris(m_, t, i, node, &cavity, &tris);
   Candidate cand = Evaluate(tris);
   if (!SplitOk(cand.min_agreement, cavity) &&
-      !(rescue_ && RescueSplit(node, &cavity, &tris, &cand))) {
+      !(mode.rescue && RescueSplit(node, &cavity, &tris, &cand))) {
     DropLastNode();
     return false;
   }
-  Apply(cavity, tris, cand);
+  Apply(cavity, tris, cand, Phase::kRefine);
   ++stats_.edge_splits;
   Legalize(node);
   return true;
@@ -281,7 +298,7 @@ bool Refiner::RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* 
   return true;
 }
 
-bool Refiner::TryFlip(int t, int i) {
+bool Refiner::TryFlip(int t, int i, Phase phase) {
   if (m_.kind[t][i] != EdgeKind::kFree) return false;
   std::vector<int> cavity;
   std::vector<Tri> tris;
@@ -302,7 +319,7 @@ bool Refiner::TryFlip(int t, int i) {
     better = new_area > old_area * (1 + 1e-9);
   }
   if (!better) return false;
-  Apply(cavity, tris, cand);
+  Apply(cavity, tris, cand, phase);
   ++stats_.flips;
   return true;
 }
@@ -318,7 +335,7 @@ void Refiner::Legalize(int node) {
     int k = m_.CornerOf(t, node);
     if (k < 0) continue;
     int u = m_.nbr[t][k];
-    if (TryFlip(t, k)) {
+    if (TryFlip(t, k, Phase::kRefine)) {
       for (int x : {t, u})
         if (x >= 0 && m_.alive[x] && m_.CornerOf(x, node) >= 0) stack.push_back(x);
     }
