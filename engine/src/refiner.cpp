@@ -24,18 +24,18 @@ bool Refiner::EvaluateBelow(const std::vector<Tri>& tris, bool stop, double old_
   std::vector<double>& agreement = agreement_;  // scratch
   agreement.resize(tris.size());
   for (size_t k = 0; k < tris.size(); ++k) {
-    m_.FoldCorners(tris[k], uv, p, n);
+    mesh_.FoldCorners(tris[k], uv, p, n);
     agreement[k] = TriangleAgreement(uv, p, n);
     cand->min_agreement = std::min(cand->min_agreement, agreement[k]);
   }
   if (stop && !AgreementOk(cand->min_agreement, old_agree)) return false;
   cand->measures.resize(tris.size());
   for (size_t k = 0; k < tris.size(); ++k) {
-    m_.MeasureCorners(tris[k], uv, p);
+    mesh_.MeasureCorners(tris[k], uv, p);
     TriangleMeasure& m = cand->measures[k];
     if (!stop)
-      m = MeasureTriangle(s_, uv, p, c_);
-    else if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m))
+      m = MeasureTriangle(surface_, uv, p, criteria_);
+    else if (!MeasureTriangleBelow(surface_, uv, p, criteria_, limit, &m))
       return false;
     PenaliseFold(tris[k], agreement[k], &m);
     cand->max_violation = std::max(cand->max_violation, m.violation);
@@ -57,13 +57,14 @@ double Refiner::RingViolation(const std::vector<Tri>& tris, int v, double old_ag
     const int k = j < 0 ? first : (*order)[j];
     if (j >= 0 && k == first) continue;
     *stopper = k;
-    m_.MeasureCorners(tris[k], uv, p);
+    mesh_.MeasureCorners(tris[k], uv, p);
     TriangleMeasure& m = (*measures)[k];
-    if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m)) return m.violation;
+    if (!MeasureTriangleBelow(surface_, uv, p, criteria_, limit, &m)) return m.violation;
     worst = std::max(worst, m.violation);
     if (worst >= limit) return worst;
-    if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
-    m_.FoldCorners(tris[k], uv, p, n);
+    if (!normal_ready)
+      mesh_.normal[v] = surface_.Normal(mesh_.uv[v].x, mesh_.uv[v].y), normal_ready = true;
+    mesh_.FoldCorners(tris[k], uv, p, n);
     double agreement = TriangleAgreement(uv, p, n);
     PenaliseFold(tris[k], agreement, &m);
     min_agreement = std::min(min_agreement, agreement);
@@ -80,13 +81,13 @@ double Refiner::RingViolation(const std::vector<Tri>& tris, int v, double old_ag
 void Refiner::PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) const {
   m->agreement = agreement;
   // At a pole the corner normal is a stand-in (FoldCorners): standing is not known there.
-  bool pole = m_.pole_axis[t[0]] + m_.pole_axis[t[1]] + m_.pole_axis[t[2]] > -3;
-  if (agreement > kInvalid && agreement < c_.min_normal_cos && !pole) {
+  bool pole = mesh_.pole_axis[t[0]] + mesh_.pole_axis[t[1]] + mesh_.pole_axis[t[2]] > -3;
+  if (agreement > kInvalid && agreement < criteria_.min_normal_cos && !pole) {
     Vec2 uv[3], fold_uv[3];
     Vec3 p[3], fold_p[3], n[3];
-    m_.MeasureCorners(t, uv, p);
-    m_.FoldCorners(t, fold_uv, fold_p, n);
-    MeasureStanding(s_, uv, p, n, c_, m);
+    mesh_.MeasureCorners(t, uv, p);
+    mesh_.FoldCorners(t, fold_uv, fold_p, n);
+    MeasureStanding(surface_, uv, p, n, criteria_, m);
   }
   if (agreement <= 0) m->violation = std::max(m->violation, kFoldViolation);
 }
@@ -96,7 +97,7 @@ bool Refiner::SplitOk(double child_min, const std::vector<int>& parents) const {
   int parent_gen = 0;
   for (int t : parents) {
     parent_min = std::min(parent_min, measure_[t].agreement);
-    parent_gen = std::max(parent_gen, static_cast<int>(gen_[t]));
+    parent_gen = std::max(parent_gen, static_cast<int>(generation_[t]));
   }
   // A young parent that stands up against the surface spans too much of it: its children may
   // fold, and refinement (a fold counts as a violation) goes on until they do not. Later
@@ -109,7 +110,7 @@ bool Refiner::SplitOk(double child_min, const std::vector<int>& parents) const {
 double Refiner::Agreement(int t) const {
   Vec2 uv[3];
   Vec3 p[3], n[3];
-  m_.FoldCorners(m_.tri[t], uv, p, n);
+  mesh_.FoldCorners(mesh_.tri[t], uv, p, n);
   return TriangleAgreement(uv, p, n);
 }
 
@@ -124,38 +125,38 @@ double Refiner::MinAgreement(const std::vector<int>& tris) const {
 
 int Refiner::NewNode(Vec2 q, bool on_pole, int pole_of) {
   if (on_pole) {
-    return m_.AddNode(q, m_.xyz[pole_of], s_.Normal(q.x, q.y), true, m_.ref[pole_of],
-                      m_.pole_axis[pole_of]);
+    return mesh_.AddNode(q, mesh_.xyz[pole_of], surface_.Normal(q.x, q.y), true, mesh_.ref[pole_of],
+                         mesh_.pole_axis[pole_of]);
   }
-  Vec3 x = s_.Point(q.x, q.y);
-  return m_.AddNode(q, x, s_.Normal(q.x, q.y), false, NodeRef{});
+  Vec3 x = surface_.Point(q.x, q.y);
+  return mesh_.AddNode(q, x, surface_.Normal(q.x, q.y), false, NodeRef{});
 }
 
 void Refiner::DropLastNode() {
-  m_.uv.pop_back(), m_.xyz.pop_back(), m_.normal.pop_back(), m_.fixed.pop_back();
-  m_.ref.pop_back(), m_.node_tri.pop_back(), m_.pole_axis.pop_back();
+  mesh_.uv.pop_back(), mesh_.xyz.pop_back(), mesh_.normal.pop_back(), mesh_.fixed.pop_back();
+  mesh_.ref.pop_back(), mesh_.node_tri.pop_back(), mesh_.pole_axis.pop_back();
 }
 
 std::vector<int> Refiner::Apply(const std::vector<int>& cavity, const std::vector<Tri>& tris,
                                 const Candidate& cand, Phase phase) {
   // Generation: how many splits a triangle descends from (flips and collapses keep it).
   int gen = 0;
-  for (int t : cavity) gen = std::max(gen, static_cast<int>(gen_[t]));
+  for (int t : cavity) gen = std::max(gen, static_cast<int>(generation_[t]));
   if (phase == Phase::kRefine && tris.size() > cavity.size()) gen = std::min(gen + 1, 255);
-  std::vector<int> ids = ReplaceCavity(&m_, cavity, tris);
-  if (measure_.size() < m_.tri.size()) {
-    measure_.resize(m_.tri.size());
-    stamp_.resize(m_.tri.size(), 0);
-    gen_.resize(m_.tri.size(), 0);
+  std::vector<int> ids = ReplaceCavity(&mesh_, cavity, tris);
+  if (measure_.size() < mesh_.tri.size()) {
+    measure_.resize(mesh_.tri.size());
+    stamp_.resize(mesh_.tri.size(), 0);
+    generation_.resize(mesh_.tri.size(), 0);
   }
-  for (int id : ids) gen_[id] = static_cast<uint8_t>(gen);
+  for (int id : ids) generation_[id] = static_cast<uint8_t>(gen);
   for (size_t k = 0; k < ids.size(); ++k) {
     measure_[ids[k]] = cand.measures[k];
     ++stamp_[ids[k]];
     if (phase == Phase::kRefine && cand.measures[k].violation > 1) Push(ids[k]);
   }
   for (int t : cavity)
-    if (!m_.alive[t]) ++stamp_[t];
+    if (!mesh_.alive[t]) ++stamp_[t];
   return ids;
 }
 

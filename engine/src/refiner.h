@@ -21,9 +21,16 @@ namespace rdmesh {
 
 class Refiner {
  public:
-  Refiner(WorkMesh& m, Surface& s, const FaceCriteria& c, double su, double sv, Context* ctx,
-          RefineStats* stats)
-      : m_(m), s_(s), c_(c), su_(su), sv_(sv), ctx_(ctx), stats_(*stats) {}
+  // `scale_u`, `scale_v` make (u,v) roughly isometric (FaceDomain::scale_u, scale_v).
+  Refiner(WorkMesh& mesh, Surface& surface, const FaceCriteria& criteria, double scale_u,
+          double scale_v, Context* context, RefineStats* stats)
+      : mesh_(mesh),
+        surface_(surface),
+        criteria_(criteria),
+        scale_u_(scale_u),
+        scale_v_(scale_v),
+        context_(context),
+        stats_(*stats) {}
 
   Status RefineToCriteria(int64_t max_triangles);
   Status Improve();
@@ -85,7 +92,7 @@ class Refiner {
   // An optimisation step may not fold a triangle, nor push agreement below the guard where the
   // old triangles met it.
   bool AgreementOk(double new_min, double old_min) const {
-    return new_min > 0 && new_min >= std::min(c_.min_normal_cos, old_min) - 1e-12;
+    return new_min > 0 && new_min >= std::min(criteria_.min_normal_cos, old_min) - 1e-12;
   }
 
   // --- Nodes and cavities (refiner.cpp)
@@ -125,15 +132,15 @@ class Refiner {
   int FlipPass();
   int SmoothPass();
 
-  WorkMesh& m_;
-  Surface& s_;
-  const FaceCriteria& c_;
-  double su_, sv_;
-  Context* ctx_;
+  WorkMesh& mesh_;
+  Surface& surface_;
+  const FaceCriteria& criteria_;
+  double scale_u_, scale_v_;
+  Context* context_;
   RefineStats& stats_;
   std::vector<TriangleMeasure> measure_;
   std::vector<uint32_t> stamp_;
-  std::vector<uint8_t> gen_;  // per triangle: split generation
+  std::vector<uint8_t> generation_;  // per triangle: how many splits it descends from
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
   std::vector<int> fan_ring_, fan_nodes_, link_ring_, link_nodes_;  // BestCollapse's scratch
   std::vector<Tri> collapse_tris_;
