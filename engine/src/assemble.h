@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "face_domain.h"
+#include "node_ref.h"
 #include "rdmesh/mesh.h"
 
 namespace rdmesh {

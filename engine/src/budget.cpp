@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "model.h"
+#include "pipeline.h"
 
 namespace rdmesh {
 

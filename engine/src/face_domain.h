@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "geom.h"
+#include "grids.h"
+#include "node_ref.h"
 #include "rdmesh/context.h"
 #include "rdmesh/status.h"
 #include "surface.h"
@@ -16,22 +18,6 @@
 namespace rdmesh {
 
 class Model;
-
-/// Where a mesh node sits on the B-rep.
-struct NodeRef {
-  int dim = 2;     ///< 0 vertex, 1 edge, 2 face interior
-  int entity = 0;  ///< vertex id, edge id or face id (1-based)
-  double t = 0;    ///< curve parameter on an edge
-};
-
-/// One B-rep edge's grid: curve parameters and world points, endpoints at the vertices.
-struct EdgeGrid {
-  std::vector<double> t;
-  std::vector<Vec3> xyz;
-  int first_vertex = 0;  ///< vertex id at t.front()
-  int last_vertex = 0;   ///< vertex id at t.back()
-  bool degenerate = false;
-};
 
 /// Boundary of a face in (u,v). Nodes are the boundary nodes; segments join them with the face
 /// on their left for a FORWARD face (orientation is not relied on by the triangulation). A

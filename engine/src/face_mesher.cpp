@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "cdt.h"
+#include "face_domain.h"
 #include "model.h"
 #include "model_info.h"
 #include "operations.h"

@@ -5,8 +5,9 @@
 #include <memory>
 #include <vector>
 
-#include "face_domain.h"
+#include "grids.h"
 #include "measure.h"
+#include "node_ref.h"
 #include "rdmesh/context.h"
 #include "rdmesh/mesh.h"
 

@@ -4,13 +4,22 @@
 
 #include <vector>
 
-#include "face_domain.h"
+#include "geom.h"
 #include "rdmesh/context.h"
 #include "rdmesh/status.h"
 
 namespace rdmesh {
 
 class Model;
+
+/// One B-rep edge's grid: curve parameters and world points, endpoints at the vertices.
+struct EdgeGrid {
+  std::vector<double> t;
+  std::vector<Vec3> xyz;
+  int first_vertex = 0;  ///< vertex id at t.front()
+  int last_vertex = 0;   ///< vertex id at t.back()
+  bool degenerate = false;
+};
 
 struct GridCriteria {
   double max_deviation = 0;  ///< model units; 0 = off

@@ -8,6 +8,7 @@
 #include <set>
 #include <unordered_map>
 
+#include "face_domain.h"
 #include "model.h"
 #include "parallel.h"
 #include "surface.h"

@@ -8,7 +8,7 @@
 
 #include <vector>
 
-#include "face_domain.h"
+#include "grids.h"
 #include "rdmesh/context.h"
 #include "rdmesh/status.h"
 

@@ -23,21 +23,21 @@ constexpr double kCollapseSlack = 1.6;
 
 bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
   best->w = -1;
-  if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
+  if (mesh_.fixed[v] || mesh_.node_tri[v] < 0) return false;
   std::vector<int>&cavity = fan_ring_, &nv = fan_nodes_, &nw = link_nodes_;
-  m_.Fan(v, &cavity, &nv);
+  mesh_.Fan(v, &cavity, &nv);
   if (nv.size() != cavity.size()) return false;  // not a closed fan
   const double old_agree = MinAgreement(cavity);
   std::vector<Tri>& tris = collapse_tris_;
   Candidate& cand = collapse_cand_;
   for (int w : nv) {
-    CollapseTris(m_, v, w, cavity, &tris);
+    CollapseTris(mesh_, v, w, cavity, &tris);
     bool oriented = true;  // the cheap (u,v) test first
     for (const Tri& nt : tris)
-      oriented = oriented && Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0;
+      oriented = oriented && Orient(mesh_.uv[nt[0]], mesh_.uv[nt[1]], mesh_.uv[nt[2]]) > 0;
     if (!oriented) continue;
     // Link condition: v and w share exactly the two apexes of the triangles on edge v-w.
-    m_.Fan(w, &link_ring_, &nw);
+    mesh_.Fan(w, &link_ring_, &nw);
     int common = 0;
     for (int x : nv) common += std::find(nw.begin(), nw.end(), x) != nw.end();
     if (common != 2) continue;
@@ -59,28 +59,29 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   const int w = choice.w;
   std::vector<Tri> old_tris;
   std::vector<TriangleMeasure> old_measures;
-  for (int t : choice.cavity) old_tris.push_back(m_.tri[t]), old_measures.push_back(measure_[t]);
-  std::vector<int> ids = Apply(choice.cavity, choice.tris, choice.cand);
-  m_.node_tri[v] = -1;
+  for (int t : choice.cavity) old_tris.push_back(mesh_.tri[t]), old_measures.push_back(measure_[t]);
+  std::vector<int> ids = Apply(choice.cavity, choice.tris, choice.cand, Phase::kImprove);
+  mesh_.node_tri[v] = -1;
   if (choice.cand.max_violation <= 1.0) {
-    if (!m_.fixed[w]) SmoothNode(w);
+    if (!mesh_.fixed[w]) SmoothNode(w);
     return true;
   }
   // Move w, then its free neighbours, then w again; keep it when everything around meets the
   // criteria.
   std::vector<int> movers = {w};
-  for (int x : m_.Neighbours(w))
-    if (!m_.fixed[x]) movers.push_back(x);
-  if (!m_.fixed[w]) movers.push_back(w);
-  std::vector<int> region = RingsOf(m_, movers);
+  for (int x : mesh_.Neighbours(w))
+    if (!mesh_.fixed[x]) movers.push_back(x);
+  if (!mesh_.fixed[w]) movers.push_back(w);
+  std::vector<int> region = RingsOf(mesh_, movers);
   std::vector<TriangleMeasure> region_measures;
   for (int t : region) region_measures.push_back(measure_[t]);
   std::vector<std::array<Vec3, 2>> saved_xyz;
   std::vector<Vec2> saved_uv;
-  for (int x : movers) saved_uv.push_back(m_.uv[x]), saved_xyz.push_back({m_.xyz[x], m_.normal[x]});
+  for (int x : movers)
+    saved_uv.push_back(mesh_.uv[x]), saved_xyz.push_back({mesh_.xyz[x], mesh_.normal[x]});
   // A region triangle is final once no later mover is its corner: one that still violates then
   // dooms the attempt, so it stops there (the moves are undone below either way).
-  std::vector<int> last = LastMoves(m_, movers, region);
+  std::vector<int> last = LastMoves(mesh_, movers, region);
   auto doomed = [&](int k) {
     for (size_t j = 0; j < region.size(); ++j)
       if (last[j] == k && measure_[region[j]].violation > 1.0) return true;
@@ -88,18 +89,18 @@ bool Refiner::CollapseAndSmooth(int v, CollapseChoice& choice) {
   };
   bool failed = doomed(-1);
   for (int k = 0; k < static_cast<int>(movers.size()) && !failed; ++k) {
-    if (!m_.fixed[movers[k]]) SmoothNode(movers[k]);
+    if (!mesh_.fixed[movers[k]]) SmoothNode(movers[k]);
     if (MaxViolation(region) <= 1.0) return true;
     failed = doomed(k);
   }
   for (int k = static_cast<int>(movers.size()) - 1; k >= 0; --k) {
     int x = movers[k];
-    m_.uv[x] = saved_uv[k], m_.xyz[x] = saved_xyz[k][0], m_.normal[x] = saved_xyz[k][1];
+    mesh_.uv[x] = saved_uv[k], mesh_.xyz[x] = saved_xyz[k][0], mesh_.normal[x] = saved_xyz[k][1];
   }
   for (size_t k = 0; k < region.size(); ++k) measure_[region[k]] = region_measures[k];
   Candidate back;
   back.measures = old_measures;
-  Apply(ids, old_tris, back);  // undo the collapse
+  Apply(ids, old_tris, back, Phase::kImprove);  // undo the collapse
   return false;
 }
 
@@ -107,20 +108,20 @@ int Refiner::CollapsePass() {
   // Least damage first: a queue of each node's best collapse keyed by the largest violation it
   // leaves; after a collapse the survivor is smoothed and its neighbours are re-queued.
   int count = 0;
-  std::vector<uint32_t> node_stamp(m_.node_count(), 0);
+  std::vector<uint32_t> node_stamp(mesh_.node_count(), 0);
   using Entry = std::tuple<double, int, uint32_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
   CollapseChoice choice;
-  for (int v = 0; v < m_.node_count(); ++v) {
-    if ((v & 255) == 255 && ctx_ && ctx_->ShouldStop()) return count;
+  for (int v = 0; v < mesh_.node_count(); ++v) {
+    if ((v & 255) == 255 && context_ && context_->ShouldStop()) return count;
     if (BestCollapse(v, &choice, kCollapseSlack)) queue.push({choice.cand.max_violation, v, 0});
   }
   int64_t ops = 0;
   while (!queue.empty()) {
     auto [cost, v, stamp] = queue.top();
     queue.pop();
-    if (stamp != node_stamp[v] || m_.node_tri[v] < 0) continue;
-    if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) break;
+    if (stamp != node_stamp[v] || mesh_.node_tri[v] < 0) continue;
+    if ((++ops & 255) == 0 && context_ && context_->ShouldStop()) break;
     if (!BestCollapse(v, &choice, kCollapseSlack)) continue;
     if (choice.cand.max_violation > cost * (1 + 1e-9) + 1e-12) {
       queue.push({choice.cand.max_violation, v, ++node_stamp[v]});
@@ -129,10 +130,10 @@ int Refiner::CollapsePass() {
     if (!CollapseAndSmooth(v, choice)) continue;
     ++count;
     int w = choice.w;
-    std::vector<int> around = m_.Neighbours(w);
+    std::vector<int> around = mesh_.Neighbours(w);
     around.push_back(w);
     for (int x : around) {
-      if (m_.fixed[x]) continue;
+      if (mesh_.fixed[x]) continue;
       ++node_stamp[x];
       if (BestCollapse(x, &choice, kCollapseSlack))
         queue.push({choice.cand.max_violation, x, node_stamp[x]});
@@ -144,35 +145,35 @@ int Refiner::CollapsePass() {
 
 int Refiner::FlipPass() {
   int count = 0;
-  for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
-    if ((t & 255) == 255 && ctx_ && ctx_->ShouldStop()) break;
-    if (!m_.alive[t]) continue;
+  for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
+    if ((t & 255) == 255 && context_ && context_->ShouldStop()) break;
+    if (!mesh_.alive[t]) continue;
     for (int i = 0; i < 3; ++i) {
-      if (!m_.alive[t]) break;
-      int u = m_.nbr[t][i];
-      if (u > t && TryFlip(t, i)) ++count;
+      if (!mesh_.alive[t]) break;
+      int u = mesh_.nbr[t][i];
+      if (u > t && TryFlip(t, i, Phase::kImprove)) ++count;
     }
   }
   return count;
 }
 
 bool Refiner::SmoothNode(int v) {
-  if (m_.fixed[v] || m_.node_tri[v] < 0) return false;
+  if (mesh_.fixed[v] || mesh_.node_tri[v] < 0) return false;
   SmoothScratch& x = smooth_;  // SmoothNode is not reentrant: its vectors keep their capacity
   std::vector<int>&ring = x.ring, &nv = x.nodes, &order = x.order;
-  m_.Fan(v, &ring, &nv);
+  mesh_.Fan(v, &ring, &nv);
   if (nv.size() != ring.size()) return false;
   std::vector<Tri>& tris = x.tris;
   tris.clear();
-  for (int t : ring) tris.push_back(m_.tri[t]);
+  for (int t : ring) tris.push_back(mesh_.tri[t]);
   const double old_score = MaxViolation(ring);
   const double old_agree = MinAgreement(ring);
-  const Vec2 uv0 = m_.uv[v];
-  const Vec3 x0 = m_.xyz[v], n0 = m_.normal[v];
+  const Vec2 uv0 = mesh_.uv[v];
+  const Vec3 x0 = mesh_.xyz[v], n0 = mesh_.normal[v];
   double r = 0;
   for (int w : nv) {
-    Vec2 d = m_.uv[w] - uv0;
-    r += std::hypot(d.x * su_, d.y * sv_);
+    Vec2 d = mesh_.uv[w] - uv0;
+    r += std::hypot(d.x * scale_u_, d.y * scale_v_);
   }
   r /= nv.size();
   order.resize(ring.size());  // ring triangles, worst first
@@ -189,18 +190,18 @@ bool Refiner::SmoothNode(int v) {
   int hint[4] = {-1, -1, -1, -1};
   Vec2 center = uv0;
   auto objective = [&](Vec2 q, double bound) {
-    m_.uv[v] = q;  // the (u,v) test first: S and its normal only for oriented probes
+    mesh_.uv[v] = q;  // the (u,v) test first: S and its normal only for oriented probes
     for (const Tri& nt : tris)
-      if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return -HUGE_VAL;
-    m_.xyz[v] = s_.Point(q.x, q.y);  // RingViolation evaluates the normal when it needs it
+      if (!(Orient(mesh_.uv[nt[0]], mesh_.uv[nt[1]], mesh_.uv[nt[2]]) > 0)) return -HUGE_VAL;
+    mesh_.xyz[v] = surface_.Point(q.x, q.y);  // RingViolation evaluates the normal when it needs it
     const Vec2 d = q - center;
-    const int dir =
-        std::fabs(d.x * su_) >= std::fabs(d.y * sv_) ? (d.x > 0 ? 0 : 1) : (d.y > 0 ? 2 : 3);
+    const int dir = std::fabs(d.x * scale_u_) >= std::fabs(d.y * scale_v_) ? (d.x > 0 ? 0 : 1)
+                                                                           : (d.y > 0 ? 2 : 3);
     int stopper = -1;
     double worst =
         RingViolation(tris, v, old_agree, -bound, hint[dir], &stopper, &order, &measures);
     if (worst < -bound) {
-      best_xyz = m_.xyz[v], best_normal = m_.normal[v], best_measures = measures;
+      best_xyz = mesh_.xyz[v], best_normal = mesh_.normal[v], best_measures = measures;
       center = q;
     } else {
       hint[dir] = stopper;
@@ -208,13 +209,13 @@ bool Refiner::SmoothNode(int v) {
     return -worst;
   };
   PatternSearchResult res = CrossPatternSearch(
-      objective, [](Vec2) { return true; }, uv0, -old_score, {0.2 * r / su_, 0.2 * r / sv_}, 0.1,
-      24);
+      objective, [](Vec2) { return true; }, uv0, -old_score,
+      {0.2 * r / scale_u_, 0.2 * r / scale_v_}, 0.1, 24);
   if (!(res.value > -old_score * (1 - 1e-6))) {
-    m_.uv[v] = uv0, m_.xyz[v] = x0, m_.normal[v] = n0;
+    mesh_.uv[v] = uv0, mesh_.xyz[v] = x0, mesh_.normal[v] = n0;
     return false;
   }
-  m_.uv[v] = res.x, m_.xyz[v] = best_xyz, m_.normal[v] = best_normal;  // v at the optimum
+  mesh_.uv[v] = res.x, mesh_.xyz[v] = best_xyz, mesh_.normal[v] = best_normal;  // v at the optimum
   for (size_t k = 0; k < ring.size(); ++k) {
     measure_[ring[k]] = best_measures[k];
     ++stamp_[ring[k]];
@@ -225,8 +226,8 @@ bool Refiner::SmoothNode(int v) {
 
 int Refiner::SmoothPass() {
   int count = 0;
-  for (int v = 0; v < m_.node_count(); ++v) {
-    if ((v & 255) == 255 && ctx_ && ctx_->ShouldStop()) break;
+  for (int v = 0; v < mesh_.node_count(); ++v) {
+    if ((v & 255) == 255 && context_ && context_->ShouldStop()) break;
     count += SmoothNode(v);
   }
   return count;
@@ -234,13 +235,13 @@ int Refiner::SmoothPass() {
 
 Status Refiner::Improve() {
   for (int round = 0; round < 8; ++round) {
-    if (ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
+    if (context_ && context_->ShouldStop()) return context_->StopStatus();
     int collapsed = CollapsePass();
     FlipPass();
-    if (ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
+    if (context_ && context_->ShouldStop()) return context_->StopStatus();
     SmoothPass();
     int nodes = 0;
-    for (int v = 0; v < m_.node_count(); ++v) nodes += m_.node_tri[v] >= 0;
+    for (int v = 0; v < mesh_.node_count(); ++v) nodes += mesh_.node_tri[v] >= 0;
     if (collapsed <= nodes / 500) break;
   }
   return Status::Ok();

@@ -8,8 +8,8 @@
 #include <functional>
 #include <string>
 
-#include "budget.h"
 #include "face_mesher.h"
+#include "mesh_model.h"
 #include "model.h"
 #include "rdmesh/engine.h"
 

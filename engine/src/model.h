@@ -9,11 +9,14 @@
 #include <TopoDS_Shape.hxx>
 #include <array>
 #include <gp_Trsf.hxx>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "model_payload.h"
-#include "rdmesh/engine.h"
+#include "rdmesh/context.h"
+#include "rdmesh/model_info.h"
+#include "rdmesh/status.h"
 
 namespace rdmesh {
 

@@ -2,6 +2,7 @@
 // The ModelInfo summary of a loaded model. Internal to the engine (model.cpp).
 
 #include "model.h"
+#include "rdmesh/mesh.h"
 
 namespace rdmesh {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "rdmesh/context.h"
-#include "rdmesh/engine.h"
+#include "rdmesh/model_info.h"
 #include "rdmesh/status.h"
 
 namespace rdmesh {

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "face_domain.h"
 #include "geom.h"
+#include "node_ref.h"
 
 namespace rdmesh {
 

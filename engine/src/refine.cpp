@@ -26,48 +26,44 @@ constexpr double kSliverQuality = 0.02;
 }  // namespace
 
 Status Refiner::RefineToCriteria(int64_t max_triangles) {
-  measure_.resize(m_.tri.size());
-  stamp_.assign(m_.tri.size(), 0);
-  gen_.assign(m_.tri.size(), 0);
-  refining_ = true;
-  for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
-    if ((t & 255) == 255 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
-    if (!m_.alive[t]) continue;
+  measure_.resize(mesh_.tri.size());
+  stamp_.assign(mesh_.tri.size(), 0);
+  generation_.assign(mesh_.tri.size(), 0);
+  for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
+    if ((t & 255) == 255 && context_ && context_->ShouldStop()) return context_->StopStatus();
+    if (!mesh_.alive[t]) continue;
     Vec2 uv[3];
     Vec3 p[3];
-    m_.MeasureCorners(t, uv, p);
-    measure_[t] = MeasureTriangle(s_, uv, p, c_);
-    PenaliseFold(m_.tri[t], Agreement(t), &measure_[t]);
+    mesh_.MeasureCorners(t, uv, p);
+    measure_[t] = MeasureTriangle(surface_, uv, p, criteria_);
+    PenaliseFold(mesh_.tri[t], Agreement(t), &measure_[t]);
     if (measure_[t].violation > 1) Push(t);
   }
   int64_t ops = 0;
   // Plain splits first; then the triangles they left violating get splits with flips too
   // (RescueSplit), which only they need.
   for (int phase = 0; phase < 2 && !stats_.budget_hit; ++phase) {
-    rescue_ = phase == 1;
-    if (rescue_)
-      for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t)
-        if (m_.alive[t] && measure_[t].violation > 1) Push(t);
+    SplitMode mode;
+    mode.rescue = phase == 1;
+    if (mode.rescue)
+      for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t)
+        if (mesh_.alive[t] && measure_[t].violation > 1) Push(t);
     while (!queue_.empty()) {
       auto [violation, t, stamp] = queue_.top();
       queue_.pop();
-      if (!m_.alive[t] || stamp != stamp_[t]) continue;
+      if (!mesh_.alive[t] || stamp != stamp_[t]) continue;
       if (violation <= 1) break;
-      if (m_.TriangleCount() >= max_triangles) {
+      if (mesh_.TriangleCount() >= max_triangles) {
         stats_.budget_hit = true;
         break;
       }
-      if ((++ops & 255) == 0 && ctx_ && ctx_->ShouldStop()) return ctx_->StopStatus();
+      if ((++ops & 255) == 0 && context_ && context_->ShouldStop()) return context_->StopStatus();
       // No progress here: leave it; Finish() reports it through max_violation.
-      if (gen_[t] >= kMaxGeneration) continue;
-      splitting_ = true;
-      SplitTriangle(t);
-      splitting_ = false;
+      if (generation_[t] >= kMaxGeneration) continue;
+      SplitTriangle(t, mode);
     }
     queue_ = {};
   }
-  rescue_ = false;
-  refining_ = false;
   return Status::Ok();
 }
 
@@ -75,76 +71,94 @@ bool Refiner::RealignPole(int p) {
   std::vector<int> cavity, added;
   std::vector<Tri> tris;
   double shift = 0;
-  if (!PoleFanTris(&m_, p, &cavity, &tris, &added, &shift)) return false;
+  if (!PoleFanTris(&mesh_, p, &cavity, &tris, &added, &shift)) return false;
   auto undo = [&] {
     for (size_t k = 0; k < added.size(); ++k) DropLastNode();
     return false;
   };
   // Already one aligned fan: nothing to do.
-  double span = std::max(m_.uv[p].x - s_.umin, s_.umax - s_.umin) + (s_.vmax - s_.vmin);
+  double span = std::max(mesh_.uv[p].x - surface_.umin, surface_.umax - surface_.umin) +
+                (surface_.vmax - surface_.vmin);
   if (tris.size() == cavity.size() && shift <= 1e-9 * span) return undo();
   for (const Tri& nt : tris)
-    if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return undo();
+    if (!(Orient(mesh_.uv[nt[0]], mesh_.uv[nt[1]], mesh_.uv[nt[2]]) > 0)) return undo();
   Candidate cand = Evaluate(tris);
   if (!(cand.min_agreement > 0)) return undo();
-  Apply(cavity, tris, cand);
+  Apply(cavity, tris, cand, Phase::kRefine);
   bool used = false;
   for (const Tri& nt : tris) used = used || nt[0] == p || nt[1] == p || nt[2] == p;
-  if (!used) m_.node_tri[p] = -1;
+  if (!used) mesh_.node_tri[p] = -1;
   return true;
 }
 
-bool Refiner::SplitTriangle(int t) {
-  const Tri tri = m_.tri[t];
-  // A fan triangle at a pole first gets a pole node of its own under it.
-  int poles = 0, pole = -1;
-  for (int i = 0; i < 3; ++i)
-    if (m_.pole_axis[tri[i]] >= 0) ++poles, pole = tri[i];
-  if (poles == 1 && RealignPole(pole)) return true;
+bool Refiner::SplitTriangle(int t, SplitMode mode) {
+  if (RealignPoleFan(t)) return true;
   Vec2 uv[3];
   Vec3 p[3], n[3];
-  m_.FoldCorners(tri, uv, p, n);
+  mesh_.FoldCorners(mesh_.tri[t], uv, p, n);
+  return SplitForLength(t, p, mode) || SplitSliver(t, p, mode) ||
+         SplitAtAreaOptimum(t, uv, p, mode) || SplitAnyEdge(t, p, mode);
+}
+
+// A fan triangle at a pole first gets a pole node of its own under it.
+bool Refiner::RealignPoleFan(int t) {
+  const Tri tri = mesh_.tri[t];
+  int poles = 0, pole = -1;
+  for (int i = 0; i < 3; ++i)
+    if (mesh_.pole_axis[tri[i]] >= 0) ++poles, pole = tri[i];
+  return poles == 1 && RealignPole(pole);
+}
+
+// A triangle too long for max_length: split its longest edge in the middle when allowed.
+bool Refiner::SplitForLength(int t, const Vec3 p[3], SplitMode mode) {
   const TriangleMeasure& mt = measure_[t];
-  // A triangle too long for max_length: split its longest edge in the middle when allowed.
-  double dev_ratio = c_.max_deviation > 0 ? mt.deviation / c_.max_deviation : 0;
-  double rd_ratio = c_.rd_tolerance > 0 ? mt.rd / c_.rd_tolerance : 0;
-  if (c_.max_length > 0 && mt.max_length / c_.max_length >= std::max(dev_ratio, rd_ratio)) {
+  double dev_ratio = criteria_.max_deviation > 0 ? mt.deviation / criteria_.max_deviation : 0;
+  double rd_ratio = criteria_.rd_tolerance > 0 ? mt.rd / criteria_.rd_tolerance : 0;
+  if (criteria_.max_length > 0 &&
+      mt.max_length / criteria_.max_length >= std::max(dev_ratio, rd_ratio)) {
     int longest = 0;
     double best = -1;
     for (int i = 0; i < 3; ++i) {
       double l = Dist(p[(i + 1) % 3], p[(i + 2) % 3]);
       if (l > best) best = l, longest = i;
     }
-    if (m_.kind[t][longest] != EdgeKind::kFixed && SplitEdge(t, longest)) return true;
+    if (mesh_.kind[t][longest] != EdgeKind::kFixed && SplitEdge(t, longest, mode)) return true;
   }
-  // A sliver (two corners almost together) gains nothing from an interior point: its long edges
-  // carry the deviation, so bisect the longest one (Rivara) when it may be split.
-  {
-    double l2[3], sum = 0;
-    for (int i = 0; i < 3; ++i)
-      l2[i] = Dot(p[(i + 1) % 3] - p[(i + 2) % 3], p[(i + 1) % 3] - p[(i + 2) % 3]), sum += l2[i];
-    double quality = sum > 0 ? 4 * std::sqrt(3.0) * Area(p[0], p[1], p[2]) / sum : 1;
-    int longest = static_cast<int>(std::max_element(l2, l2 + 3) - l2);
-    if (quality < kSliverQuality &&
-        m_.pole_axis[tri[0]] + m_.pole_axis[tri[1]] + m_.pole_axis[tri[2]] == -3 &&
-        m_.kind[t][longest] != EdgeKind::kFixed) {
-      if (SplitEdge(t, longest)) return true;
-      // The neighbour across the long edge blocks it (the split would fold it): refine the
-      // neighbour first, then this sliver again.
-      int u = m_.nbr[t][longest];
-      if (u >= 0 && !sliver_recursion_) {
-        sliver_recursion_ = true;
-        bool done = SplitTriangle(u);
-        sliver_recursion_ = false;
-        if (done) {
-          if (m_.alive[t]) Push(t);
-          return true;
-        }
+  return false;
+}
+
+// A sliver (two corners almost together) gains nothing from an interior point: its long edges
+// carry the deviation, so bisect the longest one (Rivara) when it may be split.
+bool Refiner::SplitSliver(int t, const Vec3 p[3], SplitMode mode) {
+  const Tri tri = mesh_.tri[t];
+  double l2[3], sum = 0;
+  for (int i = 0; i < 3; ++i)
+    l2[i] = Dot(p[(i + 1) % 3] - p[(i + 2) % 3], p[(i + 1) % 3] - p[(i + 2) % 3]), sum += l2[i];
+  double quality = sum > 0 ? 4 * std::sqrt(3.0) * Area(p[0], p[1], p[2]) / sum : 1;
+  int longest = static_cast<int>(std::max_element(l2, l2 + 3) - l2);
+  if (quality < kSliverQuality &&
+      mesh_.pole_axis[tri[0]] + mesh_.pole_axis[tri[1]] + mesh_.pole_axis[tri[2]] == -3 &&
+      mesh_.kind[t][longest] != EdgeKind::kFixed) {
+    if (SplitEdge(t, longest, mode)) return true;
+    // The neighbour across the long edge blocks it (the split would fold it): refine the
+    // neighbour first, then this sliver again.
+    int u = mesh_.nbr[t][longest];
+    if (u >= 0 && !mode.for_sliver) {
+      SplitMode neighbour = mode;
+      neighbour.for_sliver = true;
+      if (SplitTriangle(u, neighbour)) {
+        if (mesh_.alive[t]) Push(t);
+        return true;
       }
     }
   }
-  // The area-optimal interior point (the paper's Algorithm 1), searched in barycentric
-  // coordinates from where the deviation peaks.
+  return false;
+}
+
+// The area-optimal interior point (the paper's Algorithm 1), searched in barycentric
+// coordinates from where the deviation peaks; an optimum near an edge splits that edge.
+bool Refiner::SplitAtAreaOptimum(int t, const Vec2 uv[3], const Vec3 p[3], SplitMode mode) {
+  const TriangleMeasure& mt = measure_[t];
   auto to_uv = [&](Vec2 b) { return (1 - b.x - b.y) * uv[0] + (b.x * uv[1] + b.y * uv[2]); };
   double det = Orient(uv[0], uv[1], uv[2]);
   Vec2 b0{1.0 / 3, 1.0 / 3};
@@ -161,7 +175,7 @@ bool Refiner::SplitTriangle(int t) {
   auto feasible = [](Vec2 b) {
     return b.x >= kMinWeight && b.y >= kMinWeight && 1 - b.x - b.y >= kMinWeight;
   };
-  auto objective = [&](Vec2 b) { return SplitAreaRatio(s_, uv, p, to_uv(b)); };
+  auto objective = [&](Vec2 b) { return SplitAreaRatio(surface_, uv, p, to_uv(b)); };
   PatternSearchResult r =
       CrossPatternSearch(objective, feasible, b0, objective(b0), {0.08, 0.08}, 0.1, 30);
   Vec2 b = r.x;
@@ -170,7 +184,8 @@ bool Refiner::SplitTriangle(int t) {
   if (w[k] < kEdgeWeight) {
     // Split the nearby edge, unless it is a short one (that would only make slivers).
     double edge = Dist(p[(k + 1) % 3], p[(k + 2) % 3]);
-    if (m_.kind[t][k] != EdgeKind::kFixed && edge >= 0.3 * mt.max_length && SplitEdge(t, k))
+    if (mesh_.kind[t][k] != EdgeKind::kFixed && edge >= 0.3 * mt.max_length &&
+        SplitEdge(t, k, mode))
       return true;
     b = clamp_weights(b, kEdgeWeight);
   }
@@ -179,51 +194,56 @@ bool Refiner::SplitTriangle(int t) {
     int node = NewNode(to_uv(bb));
     // A node on top of a corner makes slivers, not progress.
     bool apart = true;
-    for (int i = 0; i < 3; ++i) apart = apart && Dist(m_.xyz[node], p[i]) > 0.02 * longest;
+    for (int i = 0; i < 3; ++i) apart = apart && Dist(mesh_.xyz[node], p[i]) > 0.02 * longest;
     if (!apart) {
       DropLastNode();
       continue;
     }
     std::vector<int> cavity = {t};
-    std::vector<Tri> tris = SplitTriangleTris(m_, t, node);
+    std::vector<Tri> tris = SplitTriangleTris(mesh_, t, node);
     Candidate cand = Evaluate(tris);
     if (SplitOk(cand.min_agreement, cavity) ||
-        (rescue_ && RescueSplit(node, &cavity, &tris, &cand))) {
-      Apply(cavity, tris, cand);
+        (mode.rescue && RescueSplit(node, &cavity, &tris, &cand))) {
+      Apply(cavity, tris, cand, Phase::kRefine);
       ++stats_.splits;
       Legalize(node);
       return true;
     }
     DropLastNode();
   }
-  // Neither point keeps the children unfolded: try its edges before giving up on it.
+  return false;
+}
+
+// No interior point keeps the children unfolded: try the triangle's edges before giving up.
+bool Refiner::SplitAnyEdge(int t, const Vec3 p[3], SplitMode mode) {
+  const TriangleMeasure& mt = measure_[t];
   for (int i = 0; i < 3; ++i)
-    if (m_.kind[t][i] != EdgeKind::kFixed &&
-        Dist(p[(i + 1) % 3], p[(i + 2) % 3]) >= 0.3 * mt.max_length && SplitEdge(t, i))
+    if (mesh_.kind[t][i] != EdgeKind::kFixed &&
+        Dist(p[(i + 1) % 3], p[(i + 2) % 3]) >= 0.3 * mt.max_length && SplitEdge(t, i, mode))
       return true;
   return false;
 }
 
-bool Refiner::SplitEdge(int t, int i) {
-  const int b = m_.tri[t][(i + 1) % 3], c = m_.tri[t][(i + 2) % 3];
-  const bool pole = m_.kind[t][i] == EdgeKind::kSplittable;
+bool Refiner::SplitEdge(int t, int i, SplitMode mode) {
+  const int b = mesh_.tri[t][(i + 1) % 3], c = mesh_.tri[t][(i + 2) % 3];
+  const bool pole = mesh_.kind[t][i] == EdgeKind::kSplittable;
   std::vector<int> cavity;
   std::vector<Tri> tris;
-  auto place = [&](double s) { return (1 - s) * m_.uv[b] + s * m_.uv[c]; };
+  auto place = [&](double s) { return (1 - s) * mesh_.uv[b] + s * mesh_.uv[c]; };
   double s_best = 0.5;
   if (!pole) {
     // The paper's Algorithm 2: the point on the edge that maximises the area of the new
     // triangles.
-    SplitEdgeTris(m_, t, i, -1, &cavity, &tris);
+    SplitEdgeTris(mesh_, t, i, -1, &cavity, &tris);
     std::vector<Tri> shape = tris;
     s_best = MaximizeOnInterval(
         [&](double s) {
           Vec2 q = place(s);
-          Vec3 x = s_.Point(q.x, q.y);
+          Vec3 x = surface_.Point(q.x, q.y);
           double area = 0;
           for (const Tri& nt : shape) {
             Vec3 pts[3];
-            for (int j = 0; j < 3; ++j) pts[j] = nt[j] < 0 ? x : m_.xyz[nt[j]];
+            for (int j = 0; j < 3; ++j) pts[j] = nt[j] < 0 ? x : mesh_.xyz[nt[j]];
             area += Area(pts[0], pts[1], pts[2]);
           }
           return area;
@@ -233,21 +253,21 @@ bool Refiner::SplitEdge(int t, int i) {
   if (pole) {
     // On a pole edge, put the new node under the apex, so the fan edge to it follows a
     // parameter line (a meridian on a sphere).
-    double du = m_.uv[c].x - m_.uv[b].x, dv = m_.uv[c].y - m_.uv[b].y;
-    Vec2 apex = m_.uv[m_.tri[t][i]];
-    double along =
-        (std::fabs(du) >= std::fabs(dv)) ? (apex.x - m_.uv[b].x) / du : (apex.y - m_.uv[b].y) / dv;
+    double du = mesh_.uv[c].x - mesh_.uv[b].x, dv = mesh_.uv[c].y - mesh_.uv[b].y;
+    Vec2 apex = mesh_.uv[mesh_.tri[t][i]];
+    double along = (std::fabs(du) >= std::fabs(dv)) ? (apex.x - mesh_.uv[b].x) / du
+                                                    : (apex.y - mesh_.uv[b].y) / dv;
     s_best = std::clamp(std::isfinite(along) ? along : 0.5, 0.2, 0.8);
   }
   int node = pole ? NewNode(place(s_best), true, b) : NewNode(place(s_best));
-  SplitEdgeTris(m_, t, i, node, &cavity, &tris);
+  SplitEdgeTris(mesh_, t, i, node, &cavity, &tris);
   Candidate cand = Evaluate(tris);
   if (!SplitOk(cand.min_agreement, cavity) &&
-      !(rescue_ && RescueSplit(node, &cavity, &tris, &cand))) {
+      !(mode.rescue && RescueSplit(node, &cavity, &tris, &cand))) {
     DropLastNode();
     return false;
   }
-  Apply(cavity, tris, cand);
+  Apply(cavity, tris, cand, Phase::kRefine);
   ++stats_.edge_splits;
   Legalize(node);
   return true;
@@ -265,9 +285,9 @@ bool Refiner::RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* 
     if (cand->measures[k].agreement > 0) continue;
     int w;
     Tri out[2];
-    if (!FlipOuterEdgeTris(m_, cav, nt[k], node, &w, out)) return false;
+    if (!FlipOuterEdgeTris(mesh_, cav, nt[k], node, &w, out)) return false;
     for (const Tri& x : out)
-      if (!(Orient(m_.uv[x[0]], m_.uv[x[1]], m_.uv[x[2]]) > 0)) return false;
+      if (!(Orient(mesh_.uv[x[0]], mesh_.uv[x[1]], mesh_.uv[x[2]]) > 0)) return false;
     nt[k] = out[0];
     nt.push_back(out[1]);
     cav.push_back(w);
@@ -281,14 +301,14 @@ bool Refiner::RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* 
   return true;
 }
 
-bool Refiner::TryFlip(int t, int i) {
-  if (m_.kind[t][i] != EdgeKind::kFree) return false;
+bool Refiner::TryFlip(int t, int i, Phase phase) {
+  if (mesh_.kind[t][i] != EdgeKind::kFree) return false;
   std::vector<int> cavity;
   std::vector<Tri> tris;
-  if (!FlipTris(m_, t, i, &cavity, &tris)) return false;
+  if (!FlipTris(mesh_, t, i, &cavity, &tris)) return false;
   // Both new triangles must keep positive orientation: a cheap test first.
   for (const Tri& nt : tris)
-    if (!(Orient(m_.uv[nt[0]], m_.uv[nt[1]], m_.uv[nt[2]]) > 0)) return false;
+    if (!(Orient(mesh_.uv[nt[0]], mesh_.uv[nt[1]], mesh_.uv[nt[2]]) > 0)) return false;
   double old_score = MaxViolation(cavity);
   Candidate cand = Evaluate(tris);
   if (!AgreementOk(cand.min_agreement, MinAgreement(cavity))) return false;
@@ -297,30 +317,32 @@ bool Refiner::TryFlip(int t, int i) {
     // Ties (no criterion bites, e.g. planar): the larger 3D area, else keep.
     double old_area = 0, new_area = 0;
     for (int x : cavity)
-      old_area += Area(m_.xyz[m_.tri[x][0]], m_.xyz[m_.tri[x][1]], m_.xyz[m_.tri[x][2]]);
-    for (const Tri& nt : tris) new_area += Area(m_.xyz[nt[0]], m_.xyz[nt[1]], m_.xyz[nt[2]]);
+      old_area +=
+          Area(mesh_.xyz[mesh_.tri[x][0]], mesh_.xyz[mesh_.tri[x][1]], mesh_.xyz[mesh_.tri[x][2]]);
+    for (const Tri& nt : tris)
+      new_area += Area(mesh_.xyz[nt[0]], mesh_.xyz[nt[1]], mesh_.xyz[nt[2]]);
     better = new_area > old_area * (1 + 1e-9);
   }
   if (!better) return false;
-  Apply(cavity, tris, cand);
+  Apply(cavity, tris, cand, phase);
   ++stats_.flips;
   return true;
 }
 
 void Refiner::Legalize(int node) {
   // Lawson-style: test the edges opposite the new node; a flip brings two new such edges.
-  std::vector<int> stack = m_.Ring(node);
+  std::vector<int> stack = mesh_.Ring(node);
   int budget = 64;
   while (!stack.empty() && budget-- > 0) {
     int t = stack.back();
     stack.pop_back();
-    if (!m_.alive[t]) continue;
-    int k = m_.CornerOf(t, node);
+    if (!mesh_.alive[t]) continue;
+    int k = mesh_.CornerOf(t, node);
     if (k < 0) continue;
-    int u = m_.nbr[t][k];
-    if (TryFlip(t, k)) {
+    int u = mesh_.nbr[t][k];
+    if (TryFlip(t, k, Phase::kRefine)) {
       for (int x : {t, u})
-        if (x >= 0 && m_.alive[x] && m_.CornerOf(x, node) >= 0) stack.push_back(x);
+        if (x >= 0 && mesh_.alive[x] && mesh_.CornerOf(x, node) >= 0) stack.push_back(x);
     }
   }
 }
@@ -328,9 +350,9 @@ void Refiner::Legalize(int node) {
 void Refiner::Finish() {
   stats_.max_violation = 0;
   stats_.max_deviation = 0;
-  stats_.deviation.assign(m_.tri.size(), 0.0);
-  for (int t = 0; t < static_cast<int>(m_.tri.size()); ++t) {
-    if (!m_.alive[t]) continue;
+  stats_.deviation.assign(mesh_.tri.size(), 0.0);
+  for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
+    if (!mesh_.alive[t]) continue;
     stats_.max_violation = std::max(stats_.max_violation, measure_[t].violation);
     stats_.max_deviation = std::max(stats_.max_deviation, measure_[t].deviation);
     stats_.deviation[t] = measure_[t].deviation;

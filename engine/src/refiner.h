@@ -1,11 +1,10 @@
 #pragma once
 // The Refiner: one face's working mesh with the measures of its triangles, and the local
-// operations on it. Internal to face refinement: refine.cpp holds refinement to the criteria
-// (splits, flips), improve.cpp the improvement passes (collapse, flip, smooth).
+// operations on it. Internal to face refinement: refiner.cpp holds the measures and the cavity
+// replacement that every operation shares, refine.cpp refinement to the criteria (splits,
+// flips), improve.cpp the improvement passes (collapse, flip, smooth).
 
 #include <algorithm>
-#include <cassert>
-#include <cmath>
 #include <cstdint>
 #include <queue>
 #include <tuple>
@@ -20,16 +19,18 @@
 
 namespace rdmesh {
 
-// Splits of standing triangles may fold children only in the first generations.
-constexpr int kFoldingGenerations = 1;
-// The violation given to a folded triangle.
-constexpr double kFoldViolation = 4.0;
-
 class Refiner {
  public:
-  Refiner(WorkMesh& m, Surface& s, const FaceCriteria& c, double su, double sv, Context* ctx,
-          RefineStats* stats)
-      : m_(m), s_(s), c_(c), su_(su), sv_(sv), ctx_(ctx), stats_(*stats) {}
+  // `scale_u`, `scale_v` make (u,v) roughly isometric (FaceDomain::scale_u, scale_v).
+  Refiner(WorkMesh& mesh, Surface& surface, const FaceCriteria& criteria, double scale_u,
+          double scale_v, Context* context, RefineStats* stats)
+      : mesh_(mesh),
+        surface_(surface),
+        criteria_(criteria),
+        scale_u_(scale_u),
+        scale_v_(scale_v),
+        context_(context),
+        stats_(*stats) {}
 
   Status RefineToCriteria(int64_t max_triangles);
   Status Improve();
@@ -42,6 +43,20 @@ class Refiner {
     double min_agreement = 1;
   };
 
+  // What a cavity replacement (Apply) belongs to. kRefine: refinement to the criteria (splits,
+  // and the pole realignments and flips that come with them): triangles that add to their cavity
+  // are one split generation older, and new triangles that violate the criteria are queued.
+  // kImprove: the improvement passes: generations are kept, nothing is queued.
+  enum class Phase { kRefine, kImprove };
+  // How a split may go. rescue: a split that folds a child may flip the child's outer edge with
+  // it (RescueSplit), the second round of RefineToCriteria. for_sliver: the split makes room for
+  // a sliver beside it (SplitSliver), so it does not split a sliver's neighbour in turn.
+  struct SplitMode {
+    bool rescue = false;
+    bool for_sliver = false;
+  };
+
+  // --- Measures (refiner.cpp)
   Candidate Evaluate(const std::vector<Tri>& tris) {
     Candidate cand;
     EvaluateBelow(tris, false, 0, 0, &cand);
@@ -51,31 +66,7 @@ class Refiner {
   // `stop`, for a candidate wanted only when the fold guard holds (AgreementOk against old_agree)
   // and its max_violation stays below `limit`: false, with *cand partial, once either fails.
   bool EvaluateBelow(const std::vector<Tri>& tris, bool stop, double old_agree, double limit,
-                     Candidate* cand) {
-    Vec2 uv[3];
-    Vec3 p[3], n[3];
-    std::vector<double>& agreement = agreement_;  // scratch
-    agreement.resize(tris.size());
-    for (size_t k = 0; k < tris.size(); ++k) {
-      m_.FoldCorners(tris[k], uv, p, n);
-      agreement[k] = TriangleAgreement(uv, p, n);
-      cand->min_agreement = std::min(cand->min_agreement, agreement[k]);
-    }
-    if (stop && !AgreementOk(cand->min_agreement, old_agree)) return false;
-    cand->measures.resize(tris.size());
-    for (size_t k = 0; k < tris.size(); ++k) {
-      m_.MeasureCorners(tris[k], uv, p);
-      TriangleMeasure& m = cand->measures[k];
-      if (!stop)
-        m = MeasureTriangle(s_, uv, p, c_);
-      else if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m))
-        return false;
-      PenaliseFold(tris[k], agreement[k], &m);
-      cand->max_violation = std::max(cand->max_violation, m.violation);
-      if (stop && !(cand->max_violation < limit)) return false;
-    }
-    return true;
-  }
+                     Candidate* cand);
   // Evaluate(tris).max_violation for a smoothing probe of v; once it cannot win (the maximum
   // reaches `limit`, or AgreementOk fails) a value >= limit, with the triangle that showed it in
   // *stopper. v's normal is evaluated when first needed. Measures tris[first] (if >= 0), then
@@ -83,72 +74,13 @@ class Refiner {
   // how soon a loser stops. A full one leaves in `measures` what Evaluate(tris).measures holds.
   double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
                        int first, int* stopper, std::vector<int>* order,
-                       std::vector<TriangleMeasure>* measures) {
-    Vec2 uv[3];
-    Vec3 p[3], n[3];
-    double min_agreement = 1, worst = 0;
-    bool normal_ready = false;
-    measures->resize(tris.size());
-    const int count = static_cast<int>(order->size());
-    for (int j = first >= 0 ? -1 : 0; j < count; ++j) {
-      const int k = j < 0 ? first : (*order)[j];
-      if (j >= 0 && k == first) continue;
-      *stopper = k;
-      m_.MeasureCorners(tris[k], uv, p);
-      TriangleMeasure& m = (*measures)[k];
-      if (!MeasureTriangleBelow(s_, uv, p, c_, limit, &m)) return m.violation;
-      worst = std::max(worst, m.violation);
-      if (worst >= limit) return worst;
-      if (!normal_ready) m_.normal[v] = s_.Normal(m_.uv[v].x, m_.uv[v].y), normal_ready = true;
-      m_.FoldCorners(tris[k], uv, p, n);
-      double agreement = TriangleAgreement(uv, p, n);
-      PenaliseFold(tris[k], agreement, &m);
-      min_agreement = std::min(min_agreement, agreement);
-      if (!AgreementOk(min_agreement, old_agree)) return HUGE_VAL;
-      worst = std::max(worst, m.violation);  // a standing triangle's edges may raise it
-      if (worst >= limit) return worst;
-    }
-    std::stable_sort(order->begin(), order->end(), [&](int a, int b) {
-      return (*measures)[a].violation > (*measures)[b].violation;
-    });
-    return worst;
-  }
+                       std::vector<TriangleMeasure>* measures);
   // A folded triangle (its normal against the surface's) must be refined whatever it deviates;
   // one that stands against the surface is measured along its edges too (MeasureStanding).
-  void PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) const {
-    m->agreement = agreement;
-    // At a pole the corner normal is a stand-in (FoldCorners): standing is not known there.
-    bool pole = m_.pole_axis[t[0]] + m_.pole_axis[t[1]] + m_.pole_axis[t[2]] > -3;
-    if (agreement > kInvalid && agreement < c_.min_normal_cos && !pole) {
-      Vec2 uv[3], fold_uv[3];
-      Vec3 p[3], fold_p[3], n[3];
-      m_.MeasureCorners(t, uv, p);
-      m_.FoldCorners(t, fold_uv, fold_p, n);
-      MeasureStanding(s_, uv, p, n, c_, m);
-    }
-    if (agreement <= 0) m->violation = std::max(m->violation, kFoldViolation);
-  }
+  void PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) const;
   // Splits may not fold a child, except that a folded parent may leave children no worse.
-  bool SplitOk(double child_min, const std::vector<int>& parents) const {
-    double parent_min = 1;
-    int parent_gen = 0;
-    for (int t : parents) {
-      parent_min = std::min(parent_min, measure_[t].agreement);
-      parent_gen = std::max(parent_gen, static_cast<int>(gen_[t]));
-    }
-    // A young parent that stands up against the surface spans too much of it: its children may
-    // fold, and refinement (a fold counts as a violation) goes on until they do not. Later
-    // generations may not fold.
-    if (parent_min < 0.2 && parent_gen < kFoldingGenerations) return child_min > kInvalid;
-    if (parent_min <= 0) return child_min > kInvalid && child_min >= parent_min;
-    return child_min > 0;
-  }
-  double Agreement(int t) const {
-    Vec2 uv[3];
-    Vec3 p[3], n[3];
-    m_.FoldCorners(m_.tri[t], uv, p, n);
-    return TriangleAgreement(uv, p, n);
-  }
+  bool SplitOk(double child_min, const std::vector<int>& parents) const;
+  double Agreement(int t) const;
   double MaxViolation(const std::vector<int>& tris) const {
     double v = 0;
     for (int t : tris) v = std::max(v, measure_[t].violation);
@@ -156,57 +88,37 @@ class Refiner {
   }
   // Agreement(t) is kept in measure_[t].agreement: every measurement that lands in measure_
   // comes with the fold guard of the same corners (PenaliseFold).
-  double MinAgreement(const std::vector<int>& tris) const {
-    double a = 1;
-    for (int t : tris) {
-      assert(measure_[t].agreement == Agreement(t));
-      a = std::min(a, measure_[t].agreement);
-    }
-    return a;
-  }
+  double MinAgreement(const std::vector<int>& tris) const;
   // An optimisation step may not fold a triangle, nor push agreement below the guard where the
   // old triangles met it.
   bool AgreementOk(double new_min, double old_min) const {
-    return new_min > 0 && new_min >= std::min(c_.min_normal_cos, old_min) - 1e-12;
+    return new_min > 0 && new_min >= std::min(criteria_.min_normal_cos, old_min) - 1e-12;
   }
 
-  int NewNode(Vec2 q, bool on_pole = false, int pole_of = -1) {
-    if (on_pole) {
-      return m_.AddNode(q, m_.xyz[pole_of], s_.Normal(q.x, q.y), true, m_.ref[pole_of],
-                        m_.pole_axis[pole_of]);
-    }
-    Vec3 x = s_.Point(q.x, q.y);
-    return m_.AddNode(q, x, s_.Normal(q.x, q.y), false, NodeRef{});
-  }
-  void DropLastNode() {
-    m_.uv.pop_back(), m_.xyz.pop_back(), m_.normal.pop_back(), m_.fixed.pop_back();
-    m_.ref.pop_back(), m_.node_tri.pop_back(), m_.pole_axis.pop_back();
-  }
+  // --- Nodes and cavities (refiner.cpp)
+  int NewNode(Vec2 q, bool on_pole = false, int pole_of = -1);
+  void DropLastNode();
+  // Replaces the triangles `cavity` by `tris`, measured in `cand`; the new triangle ids.
   std::vector<int> Apply(const std::vector<int>& cavity, const std::vector<Tri>& tris,
-                         const Candidate& cand) {
-    // Generation: how many splits a triangle descends from (flips and collapses keep it).
-    int gen = 0;
-    for (int t : cavity) gen = std::max(gen, static_cast<int>(gen_[t]));
-    if (splitting_ && tris.size() > cavity.size()) gen = std::min(gen + 1, 255);
-    std::vector<int> ids = ReplaceCavity(&m_, cavity, tris);
-    if (measure_.size() < m_.tri.size()) {
-      measure_.resize(m_.tri.size());
-      stamp_.resize(m_.tri.size(), 0);
-      gen_.resize(m_.tri.size(), 0);
-    }
-    for (int id : ids) gen_[id] = static_cast<uint8_t>(gen);
-    for (size_t k = 0; k < ids.size(); ++k) {
-      measure_[ids[k]] = cand.measures[k];
-      ++stamp_[ids[k]];
-      if (refining_ && cand.measures[k].violation > 1) Push(ids[k]);
-    }
-    for (int t : cavity)
-      if (!m_.alive[t]) ++stamp_[t];
-    return ids;
-  }
+                         const Candidate& cand, Phase phase);
   void Push(int t) { queue_.push({measure_[t].violation, t, stamp_[t]}); }
 
+  // --- Refinement (refine.cpp). SplitTriangle tries its strategies in turn, the first that
+  // applies and succeeds wins: RealignPoleFan, SplitForLength, SplitSliver, SplitAtAreaOptimum,
+  // SplitAnyEdge. Each takes the triangle's corners (uv, p: FoldCorners).
+  bool SplitTriangle(int t, SplitMode mode);
+  bool RealignPoleFan(int t);
   bool RealignPole(int p);
+  bool SplitForLength(int t, const Vec3 p[3], SplitMode mode);
+  bool SplitSliver(int t, const Vec3 p[3], SplitMode mode);
+  bool SplitAtAreaOptimum(int t, const Vec2 uv[3], const Vec3 p[3], SplitMode mode);
+  bool SplitAnyEdge(int t, const Vec3 p[3], SplitMode mode);
+  bool SplitEdge(int t, int i, SplitMode mode);
+  bool RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* tris, Candidate* cand);
+  bool TryFlip(int t, int i, Phase phase);
+  void Legalize(int node);
+
+  // --- Improvement (improve.cpp)
   struct CollapseChoice {
     int w = -1;
     Candidate cand;
@@ -216,28 +128,19 @@ class Refiner {
   bool BestCollapse(int v, CollapseChoice* best, double slack = 1.0);
   bool CollapseAndSmooth(int v, CollapseChoice& choice);
   bool SmoothNode(int v);
-  bool SplitTriangle(int t);
-  bool SplitEdge(int t, int i);
-  bool RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* tris, Candidate* cand);
-  bool TryFlip(int t, int i);
-  void Legalize(int node);
   int CollapsePass();
   int FlipPass();
   int SmoothPass();
 
-  WorkMesh& m_;
-  Surface& s_;
-  const FaceCriteria& c_;
-  double su_, sv_;
-  Context* ctx_;
+  WorkMesh& mesh_;
+  Surface& surface_;
+  const FaceCriteria& criteria_;
+  double scale_u_, scale_v_;
+  Context* context_;
   RefineStats& stats_;
   std::vector<TriangleMeasure> measure_;
   std::vector<uint32_t> stamp_;
-  bool refining_ = false;
-  bool splitting_ = false;    // Apply() is applying a split
-  std::vector<uint8_t> gen_;  // per triangle: split generation
-  bool sliver_recursion_ = false;
-  bool rescue_ = false;  // splits may flip folded children's outer edges (RescueSplit)
+  std::vector<uint8_t> generation_;  // per triangle: how many splits it descends from
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
   std::vector<int> fan_ring_, fan_nodes_, link_ring_, link_nodes_;  // BestCollapse's scratch
   std::vector<Tri> collapse_tris_;

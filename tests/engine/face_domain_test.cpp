@@ -42,6 +42,7 @@
 #include <string>
 #include <vector>
 
+#include "domain_fixture.h"
 #include "grids.h"
 #include "heal.h"
 #include "model.h"
@@ -52,19 +53,9 @@
 namespace rdmesh {
 namespace {
 
-std::vector<EdgeGrid> Grids(const Model& model, double max_deviation) {
-  GridCriteria criteria;
-  criteria.max_deviation = max_deviation;
-  std::vector<EdgeGrid> grids;
-  EXPECT_TRUE(BuildEdgeGrids(model, criteria, 1, {}, nullptr, &grids).ok());
-  return grids;
-}
-
-Status Domain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
-              FaceDomain* domain) {
-  std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), false);
-  return BuildFaceDomain(model, face_id, grids, *surface, domain);
-}
+using testing::DiscWithHole;
+using testing::Domain;
+using testing::Grids;
 
 double MeshArea(const FaceMesh& f) { return f.area; }
 
@@ -79,24 +70,6 @@ void MeshFaces(const TopoDS_Shape& shape, const std::string& name, double max_de
   auto result = MeshModel(*model, options);
   ASSERT_TRUE(result.ok()) << result.status().ToString();
   *faces = result->faces;
-}
-
-// A disc of radius 1.5875 with a concentric hole of radius 1.0795 (a face of a real assembly).
-// At a deviation of 1 both circles get the 3 segments a closed edge needs at least, and the two
-// triangles cross.
-TopoDS_Shape DiscWithHole() {
-  gp_Ax2 axis(gp::Origin(), gp::DZ());
-  TopoDS_Wire outer =
-      BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(gp_Circ(axis, 1.5875)).Edge()).Wire();
-  TopoDS_Wire hole =
-      BRepBuilderAPI_MakeWire(
-          BRepBuilderAPI_MakeEdge(gp_Circ(gp_Ax2(gp::Origin(), gp::DZ(), -gp::DX()), 1.0795))
-              .Edge())
-          .Wire();
-  hole.Reverse();
-  BRepBuilderAPI_MakeFace make(gp_Pln(gp::XOY()), outer);
-  make.Add(hole);
-  return make.Face();
 }
 
 TEST(FaceDomainTest, CoarseHoleCrossesTheOuterLoopUntilHealed) {

@@ -1,7 +1,7 @@
 #pragma once
 // Names of model formats for messages (kept out of engine.h so that few files depend on it).
 
-#include "rdmesh/engine.h"
+#include "rdmesh/model_info.h"
 
 namespace rdmesh {
 

@@ -1,0 +1,39 @@
+#pragma once
+// What a loaded model is: its summary (ModelInfo) and its file format (ModelFormat). Kept apart
+// from the facade engine.h so that the engine's loading stages need not include it.
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace rdmesh {
+
+/// What a model holds, for `rdmesh info` and the service's ModelInfo.
+struct ModelInfo {
+  std::string name;            ///< file name, or the name given at upload
+  std::string format;          ///< "step", "iges" or "brep"
+  std::string length_unit;     ///< the file's own length unit, e.g. "mm", "inch"
+  double unit_scale_mm = 1.0;  ///< how many mm one file unit is (coordinates are always in mm)
+  int faces = 0;               ///< face ids 1..faces
+  int edges = 0;               ///< edge ids 1..edges
+  int vertices = 0;
+  int solids = 0;
+  int shells = 0;
+  int unique_faces = 0;                      ///< faces after instancing (each meshed once)
+  int instances = 0;                         ///< placed part instances
+  std::array<double, 6> bbox{};              ///< xmin ymin zmin xmax ymax zmax, model units
+  double diagonal = 0.0;                     ///< bbox diagonal, model units
+  std::map<std::string, int> surface_types;  ///< SurfaceTypeName -> face count
+  std::vector<std::string> part_names;       ///< names of the parts (XCAF labels)
+  bool closed = false;                       ///< every edge bounds exactly two faces (seams aside)
+};
+
+/// Model file formats.
+enum class ModelFormat { kAuto, kStep, kIges, kBrep };
+
+/// The format named by a path's extension (.step/.stp, .iges/.igs, .brep/.brp, any case), or
+/// kAuto when the extension is none of these.
+ModelFormat FormatFromExtension(const std::string& path);
+
+}  // namespace rdmesh

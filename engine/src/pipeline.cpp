@@ -1,0 +1,229 @@
+#include "pipeline.h"
+
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "assemble.h"
+#include "face_mesher.h"
+#include "grids.h"
+#include "heal.h"
+#include "model.h"
+#include "parallel.h"
+
+namespace rdmesh {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Representative face mesh cap: far above any sane request, it only stops runaway refinement.
+constexpr int64_t kFaceTriangleCap = 20'000'000;
+
+// The faces and edges a run works on.
+struct Selection {
+  std::vector<bool> wanted;       // per face id - 1: asked for (all faces when none is named)
+  std::vector<bool> mesh_it;      // per face id - 1: meshed (representatives of the wanted faces)
+  std::vector<bool> edge_needed;  // per edge id - 1: bounds a wanted or meshed face
+  std::vector<int> todo;          // the face ids to mesh, ascending
+  int64_t wanted_count = 0;
+};
+
+// Per-face reports to the context (may be null): the face, then the progress of the kFaces stage.
+class FaceReporter {
+ public:
+  FaceReporter(Context* context, int64_t total) : context_(context), total_(total) {}
+  void Finished(const FaceMesh& face) {
+    if (!context_) return;
+    context_->ReportFace(face);
+    context_->ReportProgress({Progress::Stage::kFaces, ++done_, total_});
+  }
+
+ private:
+  Context* context_;
+  const int64_t total_;
+  std::atomic<int64_t> done_{0};
+};
+
+bool Stopped(const Context* context) { return context && context->ShouldStop(); }
+
+// A face that is not part of the result.
+FaceMesh SkippedFace(const Model& model, int f) {
+  FaceMesh skipped;
+  skipped.face_id = f;
+  skipped.status = FaceStatus::kSkipped;
+  skipped.reason = "not requested";
+  skipped.exact_area = model.face_area[f - 1];
+  return skipped;
+}
+
+// 1. Select faces: the wanted ones, the representatives meshed for them, and their edges.
+Result<Selection> SelectFaces(const Model& model, const MeshOptions& options) {
+  const int nf = model.face_count();
+  Selection sel;
+  sel.wanted.assign(nf, options.face_ids.empty());
+  for (int id : options.face_ids) {
+    if (id > nf)
+      return Status(StatusCode::kInvalidArgument,
+                    "face id " + std::to_string(id) + " is out of range 1.." + std::to_string(nf));
+    sel.wanted[id - 1] = true;
+  }
+  sel.mesh_it.assign(nf, false);
+  for (int f = 1; f <= nf; ++f)
+    if (sel.wanted[f - 1]) sel.mesh_it[model.face_representative[f - 1] - 1] = true;
+  sel.edge_needed.assign(model.edge_count(), false);
+  for (int f = 1; f <= nf; ++f) {
+    if (!sel.wanted[f - 1] && !sel.mesh_it[f - 1]) continue;
+    for (TopExp_Explorer ex(model.face(f), TopAbs_EDGE); ex.More(); ex.Next()) {
+      int e = model.edges.FindIndex(ex.Current());
+      if (e > 0) sel.edge_needed[e - 1] = true;
+    }
+  }
+  for (int f = 1; f <= nf; ++f)
+    if (sel.mesh_it[f - 1]) sel.todo.push_back(f);
+  sel.wanted_count = std::count(sel.wanted.begin(), sel.wanted.end(), true);
+  return sel;
+}
+
+// 2. Edge grids: every needed edge discretised once.
+Status MakeEdgeGrids(const Model& model, const MeshOptions& options, double deviation,
+                     const Selection& sel, Context* context, std::vector<EdgeGrid>* grids) {
+  if (context) context->ReportProgress({Progress::Stage::kEdges, 0, model.edge_count()});
+  GridCriteria gc;
+  gc.max_deviation = deviation;
+  gc.rd_tolerance = options.rd_tolerance / 5;  // faces carry ~5x the RD of their edges
+  gc.max_length = options.max_edge_length;
+  gc.min_length = options.min_edge_length;
+  return BuildEdgeGrids(model, gc, options.threads, sel.edge_needed, context, grids);
+}
+
+// 4. Mesh faces, in parallel; each slot is written by one task.
+Status MeshFaces(const Model& model, const MeshOptions& options, double deviation,
+                 const Selection& sel, const std::vector<EdgeGrid>& grids, FaceSurfaces* surfaces,
+                 Context* context, FaceReporter* reporter, std::vector<FaceMesh>* faces,
+                 std::vector<std::vector<NodeRef>>* refs) {
+  FaceJob job;
+  job.criteria.max_deviation = deviation;
+  job.criteria.rd_tolerance = options.rd_tolerance;
+  job.criteria.max_length = options.max_edge_length;
+  job.criteria.min_length = options.min_edge_length;
+  job.max_triangles = kFaceTriangleCap;
+  job.nurbs = options.nurbs;
+  job.surfaces = surfaces;
+  const ParallelRunner runner(options.threads);
+  runner.For(
+      0, static_cast<int>(sel.todo.size()),
+      [&](int i) {
+        int f = sel.todo[i];
+        if (Stopped(context)) return;
+        (*faces)[f - 1] = MeshFace(model, f, grids, job, context, &(*refs)[f - 1]);
+        if (sel.wanted[f - 1]) reporter->Finished((*faces)[f - 1]);
+      },
+      Partition::kOnePerTask);
+  if (Stopped(context)) return context->StopStatus();
+  return Status::Ok();
+}
+
+// 5. Place instances: copies reuse their representative's mesh; faces not asked for (and
+// representatives meshed only for their copies) are skipped.
+Status PlaceInstances(const Model& model, const Selection& sel, const std::vector<EdgeGrid>& grids,
+                      FaceSurfaces* surfaces, Context* context, FaceReporter* reporter,
+                      std::vector<FaceMesh>* faces, std::vector<std::vector<NodeRef>>* refs) {
+  const int nf = model.face_count();
+  for (int f = 1; f <= nf; ++f) {
+    if ((f & 63) == 0 && Stopped(context)) return context->StopStatus();
+    FaceMesh& slot = (*faces)[f - 1];
+    int rep = model.face_representative[f - 1];
+    if (!sel.wanted[f - 1]) {
+      if (sel.mesh_it[f - 1]) continue;  // a representative meshed for its copies: see below
+      slot = SkippedFace(model, f);
+      (*refs)[f - 1].clear();
+      continue;
+    }
+    if (rep == f) continue;
+    std::vector<NodeRef> copy_refs;
+    slot = PlaceCopy(model, f, (*faces)[rep - 1], (*refs)[rep - 1], grids, &copy_refs, surfaces);
+    (*refs)[f - 1] = std::move(copy_refs);
+    reporter->Finished(slot);
+  }
+  // Representatives that were only meshed for their copies are not part of the result.
+  for (int f = 1; f <= nf; ++f) {
+    if (sel.wanted[f - 1] || !sel.mesh_it[f - 1]) continue;
+    (*faces)[f - 1] = SkippedFace(model, f);
+    (*refs)[f - 1].clear();
+  }
+  return Status::Ok();
+}
+
+// 7. Summarise: counts, areas and the largest estimated deviation of the assembled result.
+void Summarise(const std::vector<EdgeGrid>& grids, double deviation, MeshResult* result) {
+  MeshSummary& s = result->summary;
+  s.triangles = result->mesh.triangle_count();
+  s.nodes = result->mesh.node_count();
+  s.requested_deviation = deviation;
+  for (const FaceMesh& f : result->faces) {
+    if (f.status == FaceStatus::kOk)
+      ++s.faces_ok;
+    else if (f.status == FaceStatus::kFailed)
+      ++s.faces_failed;
+    else
+      ++s.faces_skipped;
+    s.estimated_deviation = std::max(s.estimated_deviation, f.max_deviation);
+    if (f.status != FaceStatus::kSkipped) s.exact_area += f.exact_area;
+    s.mesh_area += f.area;
+  }
+  for (const EdgeGrid& g : grids) {
+    if (g.t.size() < 2) continue;
+    ++s.edges;
+    s.edge_segments += static_cast<int64_t>(g.t.size()) - 1;
+  }
+}
+
+}  // namespace
+
+Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& options, double deviation,
+                                   Context* context, FaceSurfaces* surfaces) {
+  auto t0 = Clock::now();
+  MeshResult result;
+  result.faces.resize(model.face_count());
+  Result<Selection> sel = SelectFaces(model, options);
+  if (!sel.ok()) return sel.status();
+
+  std::vector<EdgeGrid> grids;
+  Status st = MakeEdgeGrids(model, options, deviation, *sel, context, &grids);
+  if (!st.ok()) return st;
+  // 3. Heal: split grid segments until every face's boundary loops are valid in (u,v).
+  st = HealEdgeGrids(model, sel->todo, options.nurbs, options.threads, context, &grids);
+  if (!st.ok()) return st;
+  result.summary.edge_seconds = Since(t0);
+
+  auto t1 = Clock::now();
+  const int64_t total = sel->wanted_count;
+  std::vector<std::vector<NodeRef>> refs(model.face_count());
+  if (context) context->ReportProgress({Progress::Stage::kFaces, 0, total});
+  FaceReporter reporter(context, total);
+  st = MeshFaces(model, options, deviation, *sel, grids, surfaces, context, &reporter,
+                 &result.faces, &refs);
+  if (!st.ok()) return st;
+  st = PlaceInstances(model, *sel, grids, surfaces, context, &reporter, &result.faces, &refs);
+  if (!st.ok()) return st;
+  result.summary.face_seconds = Since(t1);
+
+  // 6. Assemble, in face order.
+  if (context) context->ReportProgress({Progress::Stage::kAssembly, total, total});
+  Assemble(&result.faces, refs, &result.mesh);
+  Summarise(grids, deviation, &result);
+  result.summary.seconds = Since(t0);
+  if (context) context->ReportProgress({Progress::Stage::kDone, total, total});
+  return result;
+}
+
+}  // namespace rdmesh

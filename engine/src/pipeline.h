@@ -1,0 +1,23 @@
+#pragma once
+// One meshing run at one absolute deviation, in the stages of BRepMesh: select faces, edge grids,
+// heal, mesh faces, place instances, assemble, summarise. Edge grids are made once per edge, the
+// faces in parallel worker threads, and assembly goes in face order, so the output does not
+// depend on the thread count.
+
+#include "rdmesh/context.h"
+#include "rdmesh/mesh.h"
+#include "rdmesh/options.h"
+#include "rdmesh/status.h"
+
+namespace rdmesh {
+
+class FaceSurfaces;
+class Model;
+
+/// One run at an absolute deviation (model units). `surfaces`: face evaluators lent by earlier
+/// runs on the model (levels of detail), null = made per face. kInvalidArgument for a face id
+/// out of range, the context's stop status, or the mesh.
+Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& options, double deviation,
+                                   Context* context, FaceSurfaces* surfaces = nullptr);
+
+}  // namespace rdmesh

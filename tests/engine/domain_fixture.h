@@ -1,0 +1,59 @@
+#pragma once
+// Edge grids and face domains of a loaded model, through the engine's own stages, and a face
+// whose edge grids are too coarse for it: for the tests of face domains and of healing.
+
+#include <gtest/gtest.h>
+
+#include <BRepBuilderAPI_MakeEdge.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
+#include <TopoDS_Shape.hxx>
+#include <TopoDS_Wire.hxx>
+#include <gp_Ax2.hxx>
+#include <gp_Circ.hxx>
+#include <gp_Pln.hxx>
+#include <memory>
+#include <vector>
+
+#include "face_domain.h"
+#include "grids.h"
+#include "model.h"
+#include "surface.h"
+
+namespace rdmesh::testing {
+
+/// The edge grids of every edge at an absolute max deviation, on one thread.
+inline std::vector<EdgeGrid> Grids(const Model& model, double max_deviation) {
+  GridCriteria criteria;
+  criteria.max_deviation = max_deviation;
+  std::vector<EdgeGrid> grids;
+  EXPECT_TRUE(BuildEdgeGrids(model, criteria, 1, {}, nullptr, &grids).ok());
+  return grids;
+}
+
+/// The (u,v) domain of face `face_id` on its exact surface.
+inline Status Domain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
+                     FaceDomain* domain) {
+  std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), false);
+  return BuildFaceDomain(model, face_id, grids, *surface, domain);
+}
+
+/// A disc of radius 1.5875 with a concentric hole of radius 1.0795 (a face of a real assembly).
+/// At a deviation of 1 both circles get the 3 segments a closed edge needs at least, and the two
+/// triangles cross.
+inline TopoDS_Shape DiscWithHole() {
+  gp_Ax2 axis(gp::Origin(), gp::DZ());
+  TopoDS_Wire outer =
+      BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(gp_Circ(axis, 1.5875)).Edge()).Wire();
+  TopoDS_Wire hole =
+      BRepBuilderAPI_MakeWire(
+          BRepBuilderAPI_MakeEdge(gp_Circ(gp_Ax2(gp::Origin(), gp::DZ(), -gp::DX()), 1.0795))
+              .Edge())
+          .Wire();
+  hole.Reverse();
+  BRepBuilderAPI_MakeFace make(gp_Pln(gp::XOY()), outer);
+  make.Add(hole);
+  return make.Face();
+}
+
+}  // namespace rdmesh::testing
