@@ -10,14 +10,18 @@ Per model and tolerance, round by round, alternately `rdmesh mesh MODEL -o tN.ms
 so a change of machine load falls on both), and `cmp` of the two meshes of every round. Reports
 the medians of the meshing wall seconds (`seconds` of the --json report), of the meshing CPU
 seconds (`mesh_cpu_seconds`, all threads) and of the whole process's wall time, the speed-up
-(1-thread seconds / 2-thread seconds), and the 1-minute load average before each run: a
-wall-clock speed-up means something only when the two cores were free, that is at a load average
-well below 1 besides this run. Exits 1 when a pair of meshes differs.
+(1-thread seconds / 2-thread seconds), the 1-minute load average before each run, and the cores
+this script could get: before every round two busy processes spin for 0.5 s, and their CPU seconds
+over the wall seconds say how many cores they had (2.0 = both free). The load average alone does
+not tell: processes of other containers on the same kernel count in it, and the scheduler shares
+the cores between containers, whatever the nice level. A wall-clock speed-up means something only
+when the cores were near 2.0. Exits 1 when a pair of meshes differs.
 """
 
 import argparse
 import filecmp
 import json
+import multiprocessing
 import os
 import pathlib
 import statistics
@@ -29,6 +33,25 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 CORPUS = pathlib.Path("/work/shared/corpus")
 DEFAULT_MODELS = ["voron_bowden_module.step", "gmsh_tough_second_order.step", "nist_mbe_pmi_2.stp"]
+
+
+def _spin(seconds, queue):
+    start, cpu = time.perf_counter(), time.process_time()
+    while time.perf_counter() - start < seconds:
+        pass
+    queue.put(time.process_time() - cpu)
+
+
+def free_cores(seconds=0.5):
+    """CPU seconds of two busy processes over their wall time: the cores this script can have."""
+    queue = multiprocessing.Queue()
+    procs = [multiprocessing.Process(target=_spin, args=(seconds, queue)) for _ in range(2)]
+    for p in procs:
+        p.start()
+    cpu = sum(queue.get() for _ in procs)
+    for p in procs:
+        p.join()
+    return cpu / seconds
 
 
 def mesh(rdmesh, model, tol, threads, out):
@@ -56,14 +79,16 @@ def main():
 
     differ = False
     print("| model | tol | triangles | meshing s, 1 thread | 2 threads | speed-up | CPU s, 1 thread "
-          "| 2 threads | process s, 1 / 2 | load avg | meshes |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|")
+          "| 2 threads | process s, 1 / 2 | load avg | cores free | meshes |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="thread_speedup_") as tmp:
         for model in map(pathlib.Path, args.models):
             for tol in args.tolerances.split(","):
                 runs = {1: [], 2: []}
                 same = True
+                cores = []
                 for r in range(args.rounds):
+                    cores.append(free_cores())
                     outs = {n: pathlib.Path(tmp) / ("t%d.msh" % n) for n in (1, 2)}
                     for n in ((1, 2) if r % 2 == 0 else (2, 1)):
                         runs[n].append(mesh(args.rdmesh, model, tol, n, outs[n]))
@@ -73,11 +98,12 @@ def main():
                            for k in ("seconds", "cpu", "wall")} for n in (1, 2)}
                 loads = [x["load1"] for n in (1, 2) for x in runs[n]]
                 print("| `%s` | %s | %d | %.3f | %.3f | %.2fx | %.3f | %.3f | %.2f / %.2f | "
-                      "%.1f-%.1f | %s |" % (
+                      "%.1f-%.1f | %.2f-%.2f | %s |" % (
                           model.name, tol, runs[1][0]["triangles"], med[1]["seconds"],
                           med[2]["seconds"], med[1]["seconds"] / med[2]["seconds"],
                           med[1]["cpu"], med[2]["cpu"], med[1]["wall"], med[2]["wall"],
-                          min(loads), max(loads), "identical" if same else "DIFFER"),
+                          min(loads), max(loads), min(cores), max(cores),
+                          "identical" if same else "DIFFER"),
                       flush=True)
     print("%d rounds, medians; %s; %s" % (args.rounds, args.rdmesh,
                                           time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())))
