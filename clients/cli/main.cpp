@@ -7,6 +7,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -42,6 +43,13 @@ void OnInterrupt(int) {
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// CPU seconds (user + system, all threads) this process has used so far.
+double ProcessCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 struct CommonFlags {
@@ -185,6 +193,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   // One result, or one per level of detail (coarsest first).
   std::vector<MeshResult> results;
   Status meshed = Status::Ok();
+  const double cpu_start = ProcessCpuSeconds();
   if (levels->empty()) {
 #ifdef RDMESH_WITH_REMOTE
     Result<MeshResult> result = remote.empty()
@@ -218,6 +227,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
     meshed = MeshModelLevels(**model, *options, *levels, &context, callbacks);
 #endif
   }
+  run.mesh_cpu_seconds = ProcessCpuSeconds() - cpu_start;
   progress.Finish();
   watchdog.Disarm();  // writing is not bounded by --timeout
   if (!meshed.ok()) {
@@ -254,6 +264,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   if (flags.json && !levels->empty()) {
     nlohmann::ordered_json json = {{"model", flags.model},
                                    {"load_seconds", run.load_seconds},
+                                   {"mesh_cpu_seconds", run.mesh_cpu_seconds},
                                    {"levels", std::move(level_reports)}};
     AddStoreJson(run, &json);
     std::cout << json.dump() << std::endl;

@@ -77,6 +77,7 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
       {"face_seconds", s.face_seconds},
       {"load_seconds", run.load_seconds},
       {"write_seconds", run.write_seconds},
+      {"mesh_cpu_seconds", run.mesh_cpu_seconds},
       {"requested_deviation", s.requested_deviation},
       {"estimated_deviation", s.estimated_deviation},
       {"mesh_area", s.mesh_area},

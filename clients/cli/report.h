@@ -15,9 +15,12 @@ struct RunInfo {
   std::string output_path;
   double load_seconds = 0.0;   ///< reading the model file
   double write_seconds = 0.0;  ///< writing the output file
-  bool store_used = false;     ///< --cache-dir was given
-  bool from_store = false;     ///< the model was read from the store, not parsed
-  std::string store_problem;   ///< a discarded or unwritable store entry; "" when none
+  /// CPU time (user + system, all threads) of this process while meshing: the engine's time
+  /// without the waits a loaded machine adds to the wall-clock `seconds`. For --lod, all levels.
+  double mesh_cpu_seconds = 0.0;
+  bool store_used = false;    ///< --cache-dir was given
+  bool from_store = false;    ///< the model was read from the store, not parsed
+  std::string store_problem;  ///< a discarded or unwritable store entry; "" when none
 };
 
 /// Adds from_store (and store_problem when there was one) to `json` when the run used a store.
@@ -27,10 +30,10 @@ void AddStoreJson(const RunInfo& run, nlohmann::ordered_json* json);
 nlohmann::ordered_json ModelInfoJson(const ModelInfo& info);
 
 /// The run as one JSON object: triangles, nodes, seconds (meshing, not loading), load_seconds,
-/// write_seconds, from_store (with --cache-dir), requested_deviation, estimated_deviation,
-/// mesh_area, exact_area, faces_ok, faces_failed, faces_skipped, model, output, and faces: [{id,
-/// surface_type, triangles, deviation, area_error (|area - exact| / exact, null when exact is 0),
-/// status, reason}].
+/// write_seconds, mesh_cpu_seconds, from_store (with --cache-dir), requested_deviation,
+/// estimated_deviation, mesh_area, exact_area, faces_ok, faces_failed, faces_skipped, model,
+/// output, and faces: [{id, surface_type, triangles, deviation, area_error (|area - exact| / exact,
+/// null when exact is 0), status, reason}].
 nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& run);
 
 /// Multi-line human summary of a model.

@@ -14,7 +14,7 @@ MESH_OPTIONS = ["--max-deviation", "--max-deviation-rel", "--rd-tolerance", "--m
                 "--timeout", "--strict", "--json", "--quiet", "--output", "--edges", "--no-edges",
                 "--msh-parametric", "--lod"]
 JSON_FIELDS = ["triangles", "nodes", "seconds", "edge_seconds", "face_seconds", "load_seconds",
-               "requested_deviation",
+               "mesh_cpu_seconds", "requested_deviation",
                "estimated_deviation", "mesh_area", "exact_area", "faces_ok", "faces_failed",
                "output", "faces"]
 FACE_FIELDS = ["id", "surface_type", "triangles", "deviation", "area_error", "status", "reason",
@@ -160,6 +160,8 @@ def test_json_report(run, data_dir, tmp_path):
     assert report["seconds"] >= 0 and report["load_seconds"] >= 0
     # The stages' wall times lie within the run's; each face's within the face stage's.
     assert report["edge_seconds"] + report["face_seconds"] <= report["seconds"] + 1e-6
+    # The meshing CPU time: positive, and at most the wall time on as many threads as cores.
+    assert 0 < report["mesh_cpu_seconds"] <= (os.cpu_count() or 1) * report["seconds"] + 0.05
     assert 0 <= max(face["seconds"] for face in report["faces"]) <= report["face_seconds"] + 1e-6
     assert report["faces_ok"] == 9 and report["faces_failed"] == 0
     assert len(report["faces"]) == 9
