@@ -306,6 +306,8 @@ FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
         std::swap(f.triangles[t + 1], f.triangles[t + 2]);
   } catch (const Standard_Failure& e) {
     return Failed(f, std::string("OCCT: ") + e.DynamicType()->Name());
+  } catch (const std::exception& e) {
+    return Failed(f, e.what());
   }
   return f;
 }
