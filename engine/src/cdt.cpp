@@ -72,9 +72,8 @@ Status ConstrainedTriangulation(const std::vector<Vec2>& points,
     // One insertion can flip a long fan (points in boundary order, many on one line or circle),
     // which under a sanitizer takes a tenth of a second and more on a dense boundary: poll at
     // every insertion (a deadline test ran 3.3 s late under ASan when polling every 16th).
-    auto stop = [context]() { return context && context->ShouldStop(); };
     for (size_t i = 0; i < points.size(); ++i) {
-      if (stop()) return context->StopStatus();
+      if (context && context->ShouldStop()) return context->StopStatus();
       size_t before = cdt.number_of_vertices();
       handles[i] = cdt.insert(Point(points[i].x, points[i].y));
       if (cdt.number_of_vertices() == before)
@@ -82,7 +81,7 @@ Status ConstrainedTriangulation(const std::vector<Vec2>& points,
       handles[i]->info() = static_cast<int>(i) + 1;
     }
     for (size_t k = 0; k < segments.size(); ++k) {
-      if (stop()) return context->StopStatus();
+      if (context && context->ShouldStop()) return context->StopStatus();
       const auto& s = segments[k];
       if (s[0] == s[1]) continue;
       cdt.insert_constraint(handles[s[0]], handles[s[1]]);

@@ -207,25 +207,24 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     RefineStats stats;
     st = RefineFace(&m, *surface, job.criteria, domain.scale_u, domain.scale_v, job.max_triangles,
                     job.improve, context, &stats);
-    if (st.ok() && stats.max_violation > 1.0 + 1e-9 && !stats.budget_hit &&
-        UnfoldInitialMesh(&first, *surface, domain.scale_u, domain.scale_v) >= 0) {
+    auto stuck = [&] { return st.ok() && stats.max_violation > 1.0 + 1e-9 && !stats.budget_hit; };
+    // Refines `candidate` and keeps it when it lowers the worst violation.
+    auto keep_if_better = [&](WorkMesh* candidate) {
       RefineStats again;
-      st = RefineFace(&first, *surface, job.criteria, domain.scale_u, domain.scale_v,
+      st = RefineFace(candidate, *surface, job.criteria, domain.scale_u, domain.scale_v,
                       job.max_triangles, job.improve, context, &again);
-      if (st.ok() && again.max_violation < stats.max_violation) m = std::move(first), stats = again;
-    }
+      if (!st.ok() || !(again.max_violation < stats.max_violation)) return false;
+      m = std::move(*candidate), stats = again;
+      return true;
+    };
+    if (stuck() && UnfoldInitialMesh(&first, *surface, domain.scale_u, domain.scale_v) >= 0)
+      keep_if_better(&first);
     // Still over the criteria: refine the result again. A fresh refiner counts every triangle as
     // a first generation, whose splits may fold children (kFoldingGenerations), which frees
     // splits that the fold guard blocked. Kept only while it lowers the worst violation.
-    for (int round = 0;
-         round < kStuckRetries && st.ok() && stats.max_violation > 1.0 + 1e-9 && !stats.budget_hit;
-         ++round) {
-      WorkMesh again_mesh = m;
-      RefineStats again;
-      st = RefineFace(&again_mesh, *surface, job.criteria, domain.scale_u, domain.scale_v,
-                      job.max_triangles, job.improve, context, &again);
-      if (!st.ok() || !(again.max_violation < stats.max_violation)) break;
-      m = std::move(again_mesh), stats = again;
+    for (int round = 0; round < kStuckRetries && stuck(); ++round) {
+      WorkMesh again = m;
+      if (!keep_if_better(&again)) break;
     }
     if (!st.ok()) {
       f.status = FaceStatus::kSkipped;
@@ -257,7 +256,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
 
 FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
                    const std::vector<NodeRef>& rep_refs, const std::vector<EdgeGrid>& grids,
-                   std::vector<NodeRef>* refs, FaceSurfaces* surfaces) {
+                   std::vector<NodeRef>* refs) {
   FaceMesh f = rep;
   f.face_id = face_id;
   f.exact_area = model.face_area[face_id - 1];
@@ -267,10 +266,10 @@ FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
   try {
     // Boundary nodes: the copy's own domain lists them in the same order as the
     // representative's (same TShape), with its own exact points and ids.
-    std::unique_ptr<Surface> surface = FaceSurface(model, face_id, false, surfaces);
+    std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), false);
     FaceDomain mine, theirs;
     Status st = BuildFaceDomain(model, face_id, grids, *surface, &mine);
-    std::unique_ptr<Surface> rep_surface = FaceSurface(model, rep_id, false, surfaces);
+    std::unique_ptr<Surface> rep_surface = MakeFaceSurface(model.face(rep_id), false);
     if (st.ok()) st = BuildFaceDomain(model, rep_id, grids, *rep_surface, &theirs);
     if (!st.ok() || mine.uv.size() != theirs.uv.size())
       return Failed(f, "instance boundary differs");

@@ -51,7 +51,6 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
 /// the boundary rebuilt exactly from the copy's own edges.
 FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& representative,
                    const std::vector<NodeRef>& representative_refs,
-                   const std::vector<EdgeGrid>& grids, std::vector<NodeRef>* refs,
-                   FaceSurfaces* surfaces = nullptr);
+                   const std::vector<EdgeGrid>& grids, std::vector<NodeRef>* refs);
 
 }  // namespace rdmesh

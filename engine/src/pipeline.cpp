@@ -135,45 +135,27 @@ Status MeshFaces(const Model& model, const MeshOptions& options, double deviatio
 // 5. Place instances: copies reuse their representative's mesh; faces not asked for (and
 // representatives meshed only for their copies) are skipped.
 Status PlaceInstances(const Model& model, const Selection& sel, const std::vector<EdgeGrid>& grids,
-                      int threads, FaceSurfaces* surfaces, Context* context, FaceReporter* reporter,
+                      int threads, Context* context, FaceReporter* reporter,
                       std::vector<FaceMesh>* faces, std::vector<std::vector<NodeRef>>* refs) {
   const int nf = model.face_count();
-  // Without lent evaluators (one run at one deviation), the copies are placed in parallel: each
-  // task writes its own slot and refs and only reads its representative's, and makes its own
-  // evaluators. They are reported afterwards, in face order, as the serial loop does.
-  if (surfaces == nullptr) {
-    std::vector<int> copies;
-    for (int f = 1; f <= nf; ++f)
-      if (sel.wanted[f - 1] && model.face_representative[f - 1] != f) copies.push_back(f);
-    const ParallelRunner runner(threads);
-    runner.For(0, static_cast<int>(copies.size()), [&](int i) {
-      if (Stopped(context)) return;
-      const int f = copies[i], rep = model.face_representative[f - 1];
-      (*faces)[f - 1] =
-          PlaceCopy(model, f, (*faces)[rep - 1], (*refs)[rep - 1], grids, &(*refs)[f - 1], nullptr);
-    });
-    if (Stopped(context)) return context->StopStatus();
-    for (int f : copies) reporter->Finished((*faces)[f - 1]);
-  }
+  // The copies in parallel: each task writes its own slot and refs, only reads its
+  // representative's, and makes its own evaluators (FaceSurfaces lends a face's to one task at a
+  // time). They are reported afterwards, in face order.
+  std::vector<int> copies;
+  for (int f = 1; f <= nf; ++f)
+    if (sel.wanted[f - 1] && model.face_representative[f - 1] != f) copies.push_back(f);
+  const ParallelRunner runner(threads);
+  runner.For(0, static_cast<int>(copies.size()), [&](int i) {
+    if (Stopped(context)) return;
+    const int f = copies[i], rep = model.face_representative[f - 1];
+    (*faces)[f - 1] =
+        PlaceCopy(model, f, (*faces)[rep - 1], (*refs)[rep - 1], grids, &(*refs)[f - 1]);
+  });
+  if (Stopped(context)) return context->StopStatus();
+  for (int f : copies) reporter->Finished((*faces)[f - 1]);
+  // Faces not asked for are skipped, representatives meshed only for their copies among them.
   for (int f = 1; f <= nf; ++f) {
-    if ((f & 63) == 0 && Stopped(context)) return context->StopStatus();
-    FaceMesh& slot = (*faces)[f - 1];
-    int rep = model.face_representative[f - 1];
-    if (!sel.wanted[f - 1]) {
-      if (sel.mesh_it[f - 1]) continue;  // a representative meshed for its copies: see below
-      slot = SkippedFace(model, f);
-      (*refs)[f - 1].clear();
-      continue;
-    }
-    if (rep == f || surfaces == nullptr) continue;
-    std::vector<NodeRef> copy_refs;
-    slot = PlaceCopy(model, f, (*faces)[rep - 1], (*refs)[rep - 1], grids, &copy_refs, surfaces);
-    (*refs)[f - 1] = std::move(copy_refs);
-    reporter->Finished(slot);
-  }
-  // Representatives that were only meshed for their copies are not part of the result.
-  for (int f = 1; f <= nf; ++f) {
-    if (sel.wanted[f - 1] || !sel.mesh_it[f - 1]) continue;
+    if (sel.wanted[f - 1]) continue;
     (*faces)[f - 1] = SkippedFace(model, f);
     (*refs)[f - 1].clear();
   }
@@ -230,8 +212,8 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   st = MeshFaces(model, options, deviation, *sel, grids, surfaces, context, &reporter,
                  &result.faces, &refs);
   if (!st.ok()) return st;
-  st = PlaceInstances(model, *sel, grids, options.threads, surfaces, context, &reporter,
-                      &result.faces, &refs);
+  st =
+      PlaceInstances(model, *sel, grids, options.threads, context, &reporter, &result.faces, &refs);
   if (!st.ok()) return st;
   result.summary.face_seconds = Since(t1);
 
