@@ -11,6 +11,7 @@
 
 #include "cdt.h"
 #include "face_domain.h"
+#include "lattice_seeds.h"
 #include "model.h"
 #include "model_info.h"
 #include "operations.h"
@@ -151,6 +152,15 @@ std::unique_ptr<Surface> FaceSurfaces::Lend(const Model& model, int face_id, boo
 // How many times a face left over its criteria is refined again from its own result.
 constexpr int kStuckRetries = 2;
 
+// A sphere's lattice (SphereLatticeSeeds) stands at this fraction of the deviation, and is
+// settled by this many rounds of flips and smoothing before refinement. While tuning (boundary
+// clearance 0.5), unit sphere triangles over the interpolating minimum at 3e-3 / 1e-3 / 3e-4 /
+// 1e-4 of the diagonal: fill 0.85 1.20 / 1.17 / 1.19 / 1.18, 0.875 1.19 / 1.19 / 1.17 / 1.17,
+// 0.9 1.26 / 1.20 / 1.20 / 1.16; 0.85 was the fastest of the three (bench/RESULTS.md, "Spheres
+// start from a lattice").
+constexpr double kLatticeFill = 0.85;
+constexpr int kLatticeSettleRounds = 4;
+
 FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
                   const FaceJob& job, Context* context, std::vector<NodeRef>* refs) {
   auto t0 = std::chrono::steady_clock::now();
@@ -170,7 +180,16 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     std::vector<DomainConflict> conflicts = FindConflicts(domain, context);
     if (context && context->ShouldStop()) return Stopped(f, *context);
     if (!conflicts.empty()) return Failed(f, DescribeConflict(domain, conflicts.front()));
-    std::vector<Vec2> seeds = SeedPoints(domain, *surface);
+    // A sphere meshed to a deviation alone starts from a lattice at about its final density,
+    // settled before refinement; other faces from a coarse grid of seeds.
+    std::vector<Vec2> seeds;
+    if (f.surface_type == SurfaceType::kSphere && !job.nurbs && job.criteria.rd_tolerance == 0 &&
+        job.criteria.max_length == 0) {
+      seeds = SphereLatticeSeeds(domain, *surface, job.criteria.max_deviation, kLatticeFill,
+                                 static_cast<size_t>(job.max_triangles / 2));
+    }
+    const int settle_rounds = seeds.empty() ? 0 : kLatticeSettleRounds;
+    if (seeds.empty()) seeds = SeedPoints(domain, *surface);
     // Constrained triangulation in scaled (u,v).
     std::vector<Vec2> points;
     for (const Vec2& p : domain.uv) points.push_back({p.x * domain.scale_u, p.y * domain.scale_v});
@@ -206,25 +225,25 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     WorkMesh first = m;
     RefineStats stats;
     st = RefineFace(&m, *surface, job.criteria, domain.scale_u, domain.scale_v, job.max_triangles,
-                    job.improve, context, &stats);
+                    job.improve, context, &stats, settle_rounds);
     auto stuck = [&] { return st.ok() && stats.max_violation > 1.0 + 1e-9 && !stats.budget_hit; };
     // Refines `candidate` and keeps it when it lowers the worst violation.
-    auto keep_if_better = [&](WorkMesh* candidate) {
+    auto keep_if_better = [&](WorkMesh* candidate, int settle) {
       RefineStats again;
       st = RefineFace(candidate, *surface, job.criteria, domain.scale_u, domain.scale_v,
-                      job.max_triangles, job.improve, context, &again);
+                      job.max_triangles, job.improve, context, &again, settle);
       if (!st.ok() || !(again.max_violation < stats.max_violation)) return false;
       m = std::move(*candidate), stats = again;
       return true;
     };
     if (stuck() && UnfoldInitialMesh(&first, *surface, domain.scale_u, domain.scale_v) >= 0)
-      keep_if_better(&first);
+      keep_if_better(&first, settle_rounds);
     // Still over the criteria: refine the result again. A fresh refiner counts every triangle as
     // a first generation, whose splits may fold children (kFoldingGenerations), which frees
     // splits that the fold guard blocked. Kept only while it lowers the worst violation.
     for (int round = 0; round < kStuckRetries && stuck(); ++round) {
       WorkMesh again = m;
-      if (!keep_if_better(&again)) break;
+      if (!keep_if_better(&again, 0)) break;
     }
     if (!st.ok()) {
       f.status = FaceStatus::kSkipped;

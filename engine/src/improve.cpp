@@ -19,6 +19,9 @@ namespace {
 // between 1.2 and 1.5, 57 of 3183 between 1.5 and 2 (bench/RESULTS.md, "Profile").
 constexpr double kCollapseSlack = 1.6;
 
+// At most this many flip passes before Settle's rounds; they stop at one that flips nothing.
+constexpr int kSettleFlipPasses = 5;
+
 }  // namespace
 
 bool Refiner::BestCollapse(int v, CollapseChoice* best, double slack) {
@@ -231,6 +234,16 @@ int Refiner::SmoothPass() {
     count += SmoothNode(v);
   }
   return count;
+}
+
+void Refiner::Settle(int rounds) {
+  for (int pass = 0; pass < kSettleFlipPasses; ++pass)
+    if (FlipPass() == 0) break;
+  for (int round = 0; round < rounds; ++round) {
+    if (context_ && context_->ShouldStop()) return;
+    FlipPass();
+    SmoothPass();
+  }
 }
 
 Status Refiner::Improve() {

@@ -25,7 +25,7 @@ constexpr double kSliverQuality = 0.02;
 
 }  // namespace
 
-Status Refiner::RefineToCriteria(int64_t max_triangles) {
+Status Refiner::RefineToCriteria(int64_t max_triangles, int settle_rounds) {
   measure_.resize(mesh_.tri.size());
   stamp_.assign(mesh_.tri.size(), 0);
   generation_.assign(mesh_.tri.size(), 0);
@@ -37,8 +37,10 @@ Status Refiner::RefineToCriteria(int64_t max_triangles) {
     mesh_.MeasureCorners(t, uv, p);
     measure_[t] = MeasureTriangle(surface_, uv, p, criteria_);
     PenaliseFold(mesh_.tri[t], Agreement(t), &measure_[t]);
-    if (measure_[t].violation > 1) Push(t);
   }
+  if (settle_rounds > 0) Settle(settle_rounds);
+  for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t)
+    if (mesh_.alive[t] && measure_[t].violation > 1) Push(t);
   int64_t ops = 0;
   // Plain splits first; then the triangles they left violating get splits with flips too
   // (RescueSplit), which only they need.
@@ -361,10 +363,10 @@ void Refiner::Finish() {
 
 Status RefineFace(WorkMesh* mesh, Surface& surface, const FaceCriteria& criteria, double scale_u,
                   double scale_v, int64_t max_triangles, bool improve, Context* context,
-                  RefineStats* stats) {
+                  RefineStats* stats, int settle_rounds) {
   *stats = RefineStats();
   Refiner refiner(*mesh, surface, criteria, scale_u, scale_v, context, stats);
-  Status st = refiner.RefineToCriteria(max_triangles);
+  Status st = refiner.RefineToCriteria(max_triangles, settle_rounds);
   if (!st.ok()) return st;
   if (improve) {
     st = refiner.Improve();

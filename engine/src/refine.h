@@ -36,9 +36,12 @@ struct RefineStats {
 
 /// Refines `mesh` on `surface` until every triangle meets `criteria` (or `max_triangles` is
 /// reached), then improves it. `scale_u`, `scale_v` make (u,v) roughly isometric.
+/// With `settle_rounds` > 0 (a first triangulation seeded at about the final density, as
+/// SphereLatticeSeeds), its edges are first flipped and its free nodes moved by deviation
+/// (Refiner::Settle) before any split, so that near-misses are moved rather than split.
 /// Returns kCancelled / kDeadlineExceeded when the context asks to stop.
 Status RefineFace(WorkMesh* mesh, Surface& surface, const FaceCriteria& criteria, double scale_u,
                   double scale_v, int64_t max_triangles, bool improve, Context* context,
-                  RefineStats* stats);
+                  RefineStats* stats, int settle_rounds = 0);
 
 }  // namespace rdmesh

@@ -32,7 +32,8 @@ class Refiner {
         context_(context),
         stats_(*stats) {}
 
-  Status RefineToCriteria(int64_t max_triangles);
+  // `settle_rounds`: see RefineFace.
+  Status RefineToCriteria(int64_t max_triangles, int settle_rounds = 0);
   Status Improve();
   void Finish();
 
@@ -131,6 +132,9 @@ class Refiner {
   int CollapsePass();
   int FlipPass();
   int SmoothPass();
+  // Flip passes until none flips (at most a few), then `rounds` of a flip pass and a smoothing
+  // pass: on a first triangulation, before refinement queues anything.
+  void Settle(int rounds);
 
   WorkMesh& mesh_;
   Surface& surface_;

@@ -84,7 +84,8 @@ TEST(PipelineTest, UnitSphereNearTheOptimum) {
   const double optimum = 2 * 2.418 / delta;  // METHOD.md: Hausdorff ~ 2.418 / n on a unit sphere
   std::printf("unit sphere: %lld triangles, %.3fx the optimum %.0f\n",
               static_cast<long long>(r.summary.triangles), r.summary.triangles / optimum, optimum);
-  EXPECT_LE(r.summary.triangles, 1.4 * optimum);
+  // 1.27x before spheres started from a lattice (lattice_seeds), 1.17x since.
+  EXPECT_LE(r.summary.triangles, 1.2 * optimum);
   EXPECT_GE(r.summary.triangles, optimum);
   EXPECT_LE(r.summary.estimated_deviation, delta * (1 + 1e-9));
   EXPECT_EQ(OpenAndNonManifoldEdges(r.mesh), std::make_pair(0, 0));

@@ -1,0 +1,25 @@
+#pragma once
+// Interior seeds for a sphere face at a given deviation: rings of latitude laid out as a
+// hexagonal lattice whose equilateral triangles stand just within the deviation. Refinement
+// starts from there instead of splitting its way down from a coarse triangulation and then
+// collapsing most of what it made: the interpolating minimum is a mesh of equal equilateral
+// triangles, which such a lattice comes close to.
+
+#include <vector>
+
+#include "face_domain.h"
+#include "geom.h"
+#include "surface.h"
+
+namespace rdmesh {
+
+/// Lattice seeds for a face whose surface is a sphere in OCCT's parameters (u the longitude,
+/// v the latitude in [-pi/2, pi/2]) on `surface`, for triangles of deviation
+/// `fill * max_deviation`. Seeds lie inside the domain and clear of its boundary by 0.4 of a
+/// lattice edge in 3D. Empty when the lattice would be no finer than `min_spacing_turn`
+/// radians per edge (a coarse request: the grid of SeedPoints serves) or when it would need
+/// more than `max_seeds` seeds.
+std::vector<Vec2> SphereLatticeSeeds(const FaceDomain& domain, Surface& surface,
+                                     double max_deviation, double fill, size_t max_seeds);
+
+}  // namespace rdmesh
