@@ -236,7 +236,9 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
       m = std::move(*candidate), stats = again;
       return true;
     };
-    if (stuck() && UnfoldInitialMesh(&first, *surface, domain.scale_u, domain.scale_v) >= 0)
+    // (Only when unfolding changed something: refining the same triangulation again gives the
+    // same result.)
+    if (stuck() && UnfoldInitialMesh(&first, *surface, domain.scale_u, domain.scale_v) > 0)
       keep_if_better(&first, settle_rounds);
     // Still over the criteria: refine the result again. A fresh refiner counts every triangle as
     // a first generation, whose splits may fold children (kFoldingGenerations), which frees

@@ -122,7 +122,7 @@ int UnfoldFlips(WorkMesh* mesh) {
 
 int UnfoldInitialMesh(WorkMesh* mesh, Surface& surface, double scale_u, double scale_v) {
   WorkMesh& m = *mesh;
-  UnfoldFlips(&m);
+  const int flips = UnfoldFlips(&m);
   int added = 0;
   const int max_added = std::max(16, m.node_count());
   FoldScore score = MeshScore(m);
@@ -148,7 +148,7 @@ int UnfoldInitialMesh(WorkMesh* mesh, Surface& surface, double scale_u, double s
       progress = true;
     }
   }
-  return added;
+  return flips + added;
 }
 
 }  // namespace rdmesh

@@ -20,7 +20,8 @@ int UnfoldFlips(WorkMesh* mesh);
 
 /// UnfoldFlips, then, while triangles stay folded, bisects a folded triangle's longest free edge
 /// (in (u,v) scaled by scale_u, scale_v) and flips again, keeping a bisection only when the
-/// mesh gets fewer folds or a larger smallest agreement. Returns the number of nodes added.
+/// mesh gets fewer folds or a larger smallest agreement. Returns the number of changes (flips of
+/// the first UnfoldFlips, bisections kept): 0 leaves the mesh as it was.
 int UnfoldInitialMesh(WorkMesh* mesh, Surface& surface, double scale_u, double scale_v);
 
 }  // namespace rdmesh
