@@ -264,6 +264,18 @@ Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGr
   return Status::Ok();
 }
 
+double BoundaryGap(const FaceDomain& domain, Surface& surface) {
+  double gap = 0;
+  for (size_t i = 0; i < domain.uv.size(); ++i) {
+    const Vec2 q = domain.uv[i];
+    // Along the normal: a pcurve that is not parametrised as its 3D curve puts S(uv) beside the
+    // point, along the surface.
+    const Vec3 off = domain.xyz[i] - surface.Point(q.x, q.y);
+    gap = std::max(gap, std::fabs(Dot(off, surface.Normal(q.x, q.y))));
+  }
+  return gap;
+}
+
 std::vector<DomainConflict> FindConflicts(const FaceDomain& d, const Context* context) {
   std::vector<DomainConflict> out;
   const int ns = static_cast<int>(d.segments.size());
