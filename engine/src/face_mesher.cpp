@@ -261,16 +261,19 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     f.max_deviation = stats.max_deviation;
     f.status = FaceStatus::kOk;
     // The B-rep itself keeps the face from the requested deviation where its edges lie off the
-    // surface by more (BoundaryGap), or where the face misses it and its edges' tolerance is
-    // coarser (edge grids are not refined below an edge's tolerance: grids.cpp).
+    // surface by more (BoundaryGap), or where its edges' tolerance is coarser and the face misses
+    // it or its edges' chords do (edge grids are not refined below an edge's tolerance:
+    // grids.cpp).
     const double deviation = job.criteria.max_deviation;
     const double gap = deviation > 0 ? BoundaryGap(domain, *surface) : 0;
     const double tolerance = deviation > 0 ? EdgeTolerance(face) : 0;
     const bool missed = stats.max_violation > 1.0 + 1e-9;
+    const bool coarse =
+        tolerance > deviation && (missed || BoundaryChordHeight(domain, *surface) > deviation);
     if (gap > deviation) f.max_deviation = std::max(f.max_deviation, gap);
     if (stats.budget_hit)
       f.reason = "stopped at the per-face triangle cap";
-    else if (deviation > 0 && (gap > deviation || (missed && tolerance > deviation)))
+    else if (deviation > 0 && (gap > deviation || coarse))
       f.reason = BrepReason(deviation, gap, tolerance);
     else if (missed)
       f.reason = "some triangles could not be refined to the criteria without folding";
