@@ -22,6 +22,12 @@ nlohmann::ordered_json AreaError(double area, double exact) {
   return std::abs(area - exact) / exact;
 }
 
+// Meshed faces whose mesh misses the criteria: their reason says why (the triangle cap, folds
+// refinement could not get past, or the B-rep's own edge tolerance).
+bool OverCriteria(const FaceMesh& face) {
+  return face.status == FaceStatus::kOk && !face.reason.empty();
+}
+
 }  // namespace
 
 nlohmann::ordered_json ModelInfoJson(const ModelInfo& info) {
@@ -51,8 +57,11 @@ void AddStoreJson(const RunInfo& run, nlohmann::ordered_json* json) {
   if (!run.store_problem.empty()) (*json)["store_problem"] = run.store_problem;
 }
 
+
 nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& run) {
   const MeshSummary& s = result.summary;
+  int64_t over = 0;
+  for (const FaceMesh& face : result.faces) over += OverCriteria(face);
   nlohmann::ordered_json faces = nlohmann::ordered_json::array();
   for (const FaceMesh& face : result.faces) {
     faces.push_back({
@@ -86,6 +95,7 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
       {"faces_ok", s.faces_ok},
       {"faces_failed", s.faces_failed},
       {"faces_skipped", s.faces_skipped},
+      {"faces_over_criteria", over},
       {"faces", faces},
   };
   AddStoreJson(run, &json);
@@ -136,12 +146,17 @@ void PrintMeshReport(const ModelInfo& info, const MeshResult& result, const RunI
       << (run.from_store ? " s (from the store), mesh " : " s, mesh ") << Format("%.2f", s.seconds)
       << " s, write " << Format("%.2f", run.write_seconds) << " s\n";
   out << "output     " << run.output_path << "\n";
-  if (s.faces_failed == 0) return;
-  out << "failed faces:\n";
-  for (const FaceMesh& face : result.faces)
-    if (face.status == FaceStatus::kFailed)
+  auto list = [&](const char* title, bool (*pick)(const FaceMesh&)) {
+    bool first = true;
+    for (const FaceMesh& face : result.faces) {
+      if (!pick(face)) continue;
+      if (first) out << title << "\n", first = false;
       out << "  face " << face.face_id << " (" << SurfaceTypeName(face.surface_type)
           << "): " << (face.reason.empty() ? "no reason given" : face.reason) << "\n";
+    }
+  };
+  list("failed faces:", [](const FaceMesh& face) { return face.status == FaceStatus::kFailed; });
+  list("faces meshed over the criteria:", OverCriteria);
 }
 
 }  // namespace rdmesh::cli

@@ -264,6 +264,30 @@ Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGr
   return Status::Ok();
 }
 
+double BoundaryGap(const FaceDomain& domain, Surface& surface) {
+  double gap = 0;
+  for (size_t i = 0; i < domain.uv.size(); ++i) {
+    const Vec2 q = domain.uv[i];
+    // Along the normal: a pcurve that is not parametrised as its 3D curve puts S(uv) beside the
+    // point, along the surface.
+    const Vec3 off = domain.xyz[i] - surface.Point(q.x, q.y);
+    gap = std::max(gap, std::fabs(Dot(off, surface.Normal(q.x, q.y))));
+  }
+  return gap;
+}
+
+double BoundaryChordHeight(const FaceDomain& domain, Surface& surface) {
+  double height = 0;
+  for (size_t k = 0; k < domain.segments.size(); ++k) {
+    if (domain.segment_edge[k] == 0 || domain.segment_splittable[k]) continue;
+    const int a = domain.segments[k][0], b = domain.segments[k][1];
+    const Vec2 q = 0.5 * (domain.uv[a] + domain.uv[b]);
+    const Vec3 off = surface.Point(q.x, q.y) - 0.5 * (domain.xyz[a] + domain.xyz[b]);
+    height = std::max(height, std::fabs(Dot(off, surface.Normal(q.x, q.y))));
+  }
+  return height;
+}
+
 std::vector<DomainConflict> FindConflicts(const FaceDomain& d, const Context* context) {
   std::vector<DomainConflict> out;
   const int ns = static_cast<int>(d.segments.size());

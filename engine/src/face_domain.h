@@ -46,6 +46,17 @@ struct FaceDomain {
 Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
                        Surface& surface, FaceDomain* domain);
 
+/// How far the domain's nodes (points of the edges' 3D curves, shared with the neighbouring
+/// faces) lie off the surface at their (u,v): the largest |(xyz - S(uv)) . N(uv)|. The B-rep lets
+/// it reach the edge and vertex tolerances; the mesh's triangles along such an edge lean from its
+/// points to the surface, so the face cannot be meshed much closer than this.
+double BoundaryGap(const FaceDomain& domain, Surface& surface);
+
+/// How far the chords of the domain's edge segments (not bridges) lie off the surface at their
+/// middles, along the normal: the largest |(S(mid uv) - mid xyz) . N(mid uv)|. Face refinement
+/// cannot change them; the edge grids set them (and keep them no finer than the edge tolerance).
+double BoundaryChordHeight(const FaceDomain& domain, Surface& surface);
+
 /// A defect of a domain that the constrained triangulation cannot take: segments `a` and `b`
 /// cross, touch or overlap in (u,v), or (b = -1) segment `a` belongs to a loop that encloses no
 /// area (fewer than three nodes, or all on one line).

@@ -5,9 +5,12 @@
 #include <Geom_Surface.hxx>
 #include <Precision.hxx>
 #include <Standard_Failure.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "cdt.h"
 #include "face_domain.h"
@@ -129,6 +132,25 @@ std::unique_ptr<Surface> FaceSurface(const Model& model, int face_id, bool nurbs
                                      FaceSurfaces* surfaces) {
   if (surfaces) return surfaces->Lend(model, face_id, nurbs);
   return MakeFaceSurface(model.face(face_id), nurbs);
+}
+
+// The largest tolerance of the face's edges.
+double EdgeTolerance(const TopoDS_Face& face) {
+  double tolerance = 0;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next())
+    tolerance = std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Edge(ex.Current())));
+  return tolerance;
+}
+
+// Why the B-rep keeps a face from `deviation`: its edges lie `gap` off its surface, their
+// tolerance is up to `tolerance`.
+std::string BrepReason(double deviation, double gap, double tolerance) {
+  char text[240];
+  std::snprintf(text, sizeof(text),
+                "the B-rep prevents the requested deviation %.3g: its edge tolerance is up to %.3g "
+                "and its edges lie up to %.3g off its surface",
+                deviation, tolerance, gap);
+  return text;
 }
 
 // A face left unmeshed because the run was asked to stop (the run's status says why).
@@ -259,9 +281,22 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     if (!job.nurbs) ExactPoleNormals(face, *refs, &f);
     f.max_deviation = stats.max_deviation;
     f.status = FaceStatus::kOk;
+    // The B-rep itself keeps the face from the requested deviation where its edges lie off the
+    // surface by more (BoundaryGap), or where its edges' tolerance is coarser and the face misses
+    // it or its edges' chords do (edge grids are not refined below an edge's tolerance:
+    // grids.cpp).
+    const double deviation = job.criteria.max_deviation;
+    const double gap = deviation > 0 ? BoundaryGap(domain, *surface) : 0;
+    const double tolerance = deviation > 0 ? EdgeTolerance(face) : 0;
+    const bool missed = stats.max_violation > 1.0 + 1e-9;
+    const bool coarse =
+        tolerance > deviation && (missed || BoundaryChordHeight(domain, *surface) > deviation);
+    if (gap > deviation) f.max_deviation = std::max(f.max_deviation, gap);
     if (stats.budget_hit)
       f.reason = "stopped at the per-face triangle cap";
-    else if (stats.max_violation > 1.0 + 1e-9)
+    else if (deviation > 0 && (gap > deviation || coarse))
+      f.reason = BrepReason(deviation, gap, tolerance);
+    else if (missed)
       f.reason = "some triangles could not be refined to the criteria without folding";
   } catch (const Standard_Failure& e) {
     return Failed(f, std::string("OCCT: ") + (e.GetMessageString() && *e.GetMessageString()

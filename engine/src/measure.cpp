@@ -316,10 +316,11 @@ double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3
   return worst;
 }
 
-void MeasureStanding(Surface& s, const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3],
-                     const FaceCriteria& c, TriangleMeasure* m) {
+void MeasureEdgeHeights(Surface& s, const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3],
+                        const FaceCriteria& c, int edges, TriangleMeasure* m) {
   if (!(c.max_deviation > 0) || (c.min_length > 0 && m->max_length < 2 * c.min_length)) return;
   for (int i = 0; i < 3; ++i) {
+    if (!(edges >> i & 1)) continue;
     const int a = (i + 1) % 3, b = (i + 2) % 3;
     double length = Dist(p[a], p[b]);
     if (!(length > 0)) continue;

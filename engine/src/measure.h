@@ -52,13 +52,18 @@ bool MeasureTriangleBelow(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
 constexpr double kInvalid = -2.0;
 double TriangleAgreement(const Vec2 uv[3], const Vec3 xyz[3], const Vec3 normals[3]);
 
-/// Adds to *m, measured by MeasureTriangle, what its plane heights miss on a triangle that
-/// stands against the surface (TriangleAgreement below FaceCriteria::min_normal_cos): the surface
-/// then bends within the triangle's plane, off its edges, where a sliver across a curved profile
-/// leaves a trench. Each edge-midpoint sample's height over its edge along the mean of the edge's
-/// corner normals (`normals`, as for TriangleAgreement) raises the deviation and violation.
-void MeasureStanding(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], const Vec3 normals[3],
-                     const FaceCriteria& criteria, TriangleMeasure* m);
+/// Adds to *m, measured by MeasureTriangle, what its plane heights miss where the triangle is
+/// tilted against the surface: the mesh's distance to the surface is measured along the
+/// surface's normal, a height over the triangle's plane along the plane's, which is shorter by
+/// the cosine between them (about 0.6 on a cylinder triangle whose long edge spans 46 degrees:
+/// gmsh_angled at 3e-3). At worst the surface bends within the plane of a triangle that stands
+/// against it, off its edges, where a sliver across a curved profile leaves a trench. Each
+/// edge-midpoint sample's height over its edge along the mean of the edge's corner normals
+/// (`normals`, as for TriangleAgreement) raises the deviation and violation; edge i (opposite
+/// corner i) only when bit i of `edges` is set.
+void MeasureEdgeHeights(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
+                        const Vec3 normals[3], const FaceCriteria& criteria, int edges,
+                        TriangleMeasure* m);
 
 /// Sum of the 3D areas of the three triangles a split at q makes, over the triangle's area.
 double SplitAreaRatio(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], Vec2 q);

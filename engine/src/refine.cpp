@@ -22,6 +22,8 @@ constexpr double kEdgeWeight = 0.12;
 constexpr int kMaxGeneration = 24;
 // Below this shape quality (1 = equilateral) a triangle to refine is a sliver.
 constexpr double kSliverQuality = 0.02;
+// A reshaping flip must raise the normal agreement of the triangle it is for by this much.
+constexpr double kReshapeGain = 1e-3;
 
 }  // namespace
 
@@ -43,10 +45,13 @@ Status Refiner::RefineToCriteria(int64_t max_triangles, int settle_rounds) {
     if (mesh_.alive[t] && measure_[t].violation > 1) Push(t);
   int64_t ops = 0;
   // Plain splits first; then the triangles they left violating get splits with flips too
-  // (RescueSplit), which only they need.
-  for (int phase = 0; phase < 2 && !stats_.budget_hit; ++phase) {
+  // (RescueSplit), which only they need; then those still left, whose every split folds a child,
+  // get a flip that changes their shape (ReshapeByFlip) and are split again.
+  int64_t reshapes = mesh_.TriangleCount();  // a safety net: flips bounded by the mesh size
+  for (int phase = 0; phase < 3 && !stats_.budget_hit; ++phase) {
     SplitMode mode;
-    mode.rescue = phase == 1;
+    mode.rescue = phase >= 1;
+    const bool reshape = phase == 2;
     if (mode.rescue)
       for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t)
         if (mesh_.alive[t] && measure_[t].violation > 1) Push(t);
@@ -62,7 +67,7 @@ Status Refiner::RefineToCriteria(int64_t max_triangles, int settle_rounds) {
       if ((++ops & 255) == 0 && context_ && context_->ShouldStop()) return context_->StopStatus();
       // No progress here: leave it; Finish() reports it through max_violation.
       if (generation_[t] >= kMaxGeneration) continue;
-      SplitTriangle(t, mode);
+      if (!SplitTriangle(t, mode) && reshape && reshapes > 0 && ReshapeByFlip(t)) --reshapes;
     }
     queue_ = {};
   }
@@ -300,6 +305,37 @@ bool Refiner::RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* 
   if (!SplitOk(c.min_agreement, cav) || !(c.max_violation < MaxViolation(cav))) return false;
   *cavity = std::move(cav), *tris = std::move(nt), *cand = std::move(c);
   ++stats_.rescues;
+  return true;
+}
+
+// A triangle that no split can refine without folding a child is mostly a sliver standing on a
+// curve of the surface: its corners lie almost on one line in (u,v) that the surface bends in
+// 3D (gmsh_periodic_u_cst at 3e-4: a fan of such slivers around one node, every corner on one
+// line; every split of them adds a node on that line). A flip of one of its edges takes a corner
+// off the line: of t's flippable edges, the one whose two new triangles agree best with the
+// surface (TriangleAgreement), when they agree better than t did. Their violation may be higher,
+// but they can be split. Each flip raises the smallest agreement of its pair, so flips alone
+// cannot cycle.
+bool Refiner::ReshapeByFlip(int t) {
+  int best_edge = -1;
+  double best = std::max(0.0, measure_[t].agreement + kReshapeGain);
+  std::vector<int> cavity;
+  std::vector<Tri> tris;
+  for (int i = 0; i < 3; ++i) {
+    if (mesh_.kind[t][i] != EdgeKind::kFree || !FlipTris(mesh_, t, i, &cavity, &tris)) continue;
+    double agreement = 1;
+    for (const Tri& nt : tris) {
+      Vec2 uv[3];
+      Vec3 p[3], n[3];
+      mesh_.FoldCorners(nt, uv, p, n);
+      agreement = std::min(agreement, TriangleAgreement(uv, p, n));
+    }
+    if (agreement > best) best = agreement, best_edge = i;
+  }
+  if (best_edge < 0) return false;
+  FlipTris(mesh_, t, best_edge, &cavity, &tris);
+  Apply(cavity, tris, Evaluate(tris), Phase::kRefine);
+  ++stats_.reshapes;
   return true;
 }
 

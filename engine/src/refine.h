@@ -23,7 +23,8 @@ namespace rdmesh {
 struct RefineStats {
   int64_t splits = 0;
   int64_t edge_splits = 0;
-  int64_t rescues = 0;  ///< splits that flipped a folded child's outer edge with them
+  int64_t rescues = 0;   ///< splits that flipped a folded child's outer edge with them
+  int64_t reshapes = 0;  ///< flips that gave a triangle no split could refine another shape
   int64_t flips = 0;
   int64_t collapses = 0;
   int64_t moves = 0;

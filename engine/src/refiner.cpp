@@ -80,16 +80,32 @@ double Refiner::RingViolation(const std::vector<Tri>& tris, int v, double old_ag
 
 void Refiner::PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) const {
   m->agreement = agreement;
-  // At a pole the corner normal is a stand-in (FoldCorners): standing is not known there.
+  // At a pole the corner normal is a stand-in (FoldCorners): the edge heights are not known there.
   bool pole = mesh_.pole_axis[t[0]] + mesh_.pole_axis[t[1]] + mesh_.pole_axis[t[2]] > -3;
-  if (agreement > kInvalid && agreement < criteria_.min_normal_cos && !pole) {
+  if (agreement > kInvalid && !pole) {
+    // A triangle standing against the surface: every edge. Else the edges that refinement can
+    // split: not a chord of an edge grid, which holds that edge's deviation (and its distance to
+    // this surface, up to the edge's tolerance).
+    int edges = 7;
+    if (agreement >= criteria_.min_normal_cos)
+      for (int i = 0; i < 3; ++i)
+        if (BoundaryEdge(t[(i + 1) % 3], t[(i + 2) % 3])) edges &= ~(1 << i);
     Vec2 uv[3], fold_uv[3];
     Vec3 p[3], fold_p[3], n[3];
     mesh_.MeasureCorners(t, uv, p);
     mesh_.FoldCorners(t, fold_uv, fold_p, n);
-    MeasureStanding(surface_, uv, p, n, criteria_, m);
+    MeasureEdgeHeights(surface_, uv, p, n, criteria_, edges, m);
   }
   if (agreement <= 0) m->violation = std::max(m->violation, kFoldViolation);
+}
+
+bool Refiner::BoundaryEdge(int a, int b) const {
+  if (!mesh_.fixed[a] || !mesh_.fixed[b]) return false;
+  for (int t : mesh_.Ring(a)) {
+    const int k = mesh_.CornerOf(t, b);
+    if (k >= 0) return mesh_.kind[t][3 - k - mesh_.CornerOf(t, a)] != EdgeKind::kFree;
+  }
+  return false;  // not an edge yet: one that an operation makes, inside the face
 }
 
 bool Refiner::SplitOk(double child_min, const std::vector<int>& parents) const {

@@ -76,9 +76,12 @@ class Refiner {
   double RingViolation(const std::vector<Tri>& tris, int v, double old_agree, double limit,
                        int first, int* stopper, std::vector<int>* order,
                        std::vector<TriangleMeasure>* measures);
-  // A folded triangle (its normal against the surface's) must be refined whatever it deviates;
-  // one that stands against the surface is measured along its edges too (MeasureStanding).
+  // A folded triangle (its normal against the surface's) must be refined whatever it deviates.
+  // Every triangle but a pole's is measured along its edges too (MeasureEdgeHeights): where it is
+  // tilted against the surface its plane heights fall short.
   void PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) const;
+  // Whether nodes a and b are joined by a boundary edge (an edge grid's chord, or a pole's).
+  bool BoundaryEdge(int a, int b) const;
   // Splits may not fold a child, except that a folded parent may leave children no worse.
   bool SplitOk(double child_min, const std::vector<int>& parents) const;
   double Agreement(int t) const;
@@ -116,6 +119,7 @@ class Refiner {
   bool SplitAnyEdge(int t, const Vec3 p[3], SplitMode mode);
   bool SplitEdge(int t, int i, SplitMode mode);
   bool RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* tris, Candidate* cand);
+  bool ReshapeByFlip(int t);
   bool TryFlip(int t, int i, Phase phase);
   void Legalize(int node);
 
