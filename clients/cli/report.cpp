@@ -57,7 +57,6 @@ void AddStoreJson(const RunInfo& run, nlohmann::ordered_json* json) {
   if (!run.store_problem.empty()) (*json)["store_problem"] = run.store_problem;
 }
 
-
 nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& run) {
   const MeshSummary& s = result.summary;
   int64_t over = 0;
