@@ -16,9 +16,8 @@ namespace rdmesh {
 /// Lattice seeds for a face whose surface is a sphere in OCCT's parameters (u the longitude,
 /// v the latitude in [-pi/2, pi/2]) on `surface`, for triangles of deviation
 /// `fill * max_deviation`. Seeds lie inside the domain and clear of its boundary by 0.4 of a
-/// lattice edge in 3D. Empty when the lattice would be no finer than `min_spacing_turn`
-/// radians per edge (a coarse request: the grid of SeedPoints serves) or when it would need
-/// more than `max_seeds` seeds.
+/// lattice edge in 3D. Empty when a lattice edge would turn more than pi/8 (a coarse request:
+/// the grid of SeedPoints serves) or when it would need more than `max_seeds` seeds.
 std::vector<Vec2> SphereLatticeSeeds(const FaceDomain& domain, Surface& surface,
                                      double max_deviation, double fill, size_t max_seeds);
 

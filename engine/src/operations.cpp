@@ -55,26 +55,40 @@ int WorkMesh::CornerOf(int t, int v) const {
 
 namespace {
 
-// WorkMesh::Ring's walk, into *ring (cleared first).
-void WalkRing(const WorkMesh& m, int v, std::vector<int>* ring) {
-  ring->clear();
+// Calls visit(t) for the triangles around v, in WorkMesh::Ring's order, until it returns true
+// (then returns true). Walks one way (across the edge after v), then, if the fan is open, the
+// other way.
+template <typename Visit>
+bool VisitRing(const WorkMesh& m, int v, Visit visit) {
   int start = m.node_tri[v];
-  if (start < 0 || !m.alive[start]) return;
-  // Walk one way (across the edge after v), then, if the fan is open, the other way.
+  if (start < 0 || !m.alive[start]) return false;
+  size_t count = 0;
   int t = start;
   do {
-    ring->push_back(t);
+    if (visit(t)) return true;
+    ++count;
     int k = m.CornerOf(t, v);
     t = m.nbr[t][(k + 1) % 3];
-  } while (t >= 0 && t != start && ring->size() < 4096);
-  if (t == start) return;
+  } while (t >= 0 && t != start && count < 4096);
+  if (t == start) return false;
   t = start;
   while (true) {
     int k = m.CornerOf(t, v);
     t = m.nbr[t][(k + 2) % 3];
-    if (t < 0 || t == start || ring->size() >= 4096) break;
-    ring->push_back(t);
+    if (t < 0 || t == start || count >= 4096) break;
+    if (visit(t)) return true;
+    ++count;
   }
+  return false;
+}
+
+// WorkMesh::Ring's walk, into *ring (cleared first).
+void WalkRing(const WorkMesh& m, int v, std::vector<int>* ring) {
+  ring->clear();
+  VisitRing(m, v, [ring](int t) {
+    ring->push_back(t);
+    return false;
+  });
 }
 
 // The nodes of the triangles `ring` around v, but v, in their order of first appearance.
@@ -94,6 +108,15 @@ std::vector<int> WorkMesh::Ring(int v) const {
   ring.reserve(8);
   WalkRing(*this, v, &ring);
   return ring;
+}
+
+bool WorkMesh::EdgeKindOf(int a, int b, EdgeKind* edge_kind) const {
+  return VisitRing(*this, a, [&](int t) {
+    const int k = CornerOf(t, b);
+    if (k < 0) return false;
+    *edge_kind = kind[t][3 - k - CornerOf(t, a)];
+    return true;
+  });
 }
 
 std::vector<int> WorkMesh::Neighbours(int v) const {

@@ -54,6 +54,9 @@ struct WorkMesh {
   int CornerOf(int t, int v) const;
   /// Triangles incident to node v (walks the adjacency around it).
   std::vector<int> Ring(int v) const;
+  /// Whether nodes a and b share an edge; if so its kind into *edge_kind (from the first
+  /// triangle of Ring(a) that holds b). Allocates nothing.
+  bool EdgeKindOf(int a, int b, EdgeKind* edge_kind) const;
   /// Nodes adjacent to node v.
   std::vector<int> Neighbours(int v) const;
   /// Ring(v) into *ring and Neighbours(v) into *neighbours (same orders), from one walk, into

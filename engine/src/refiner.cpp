@@ -101,11 +101,9 @@ void Refiner::PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) c
 
 bool Refiner::BoundaryEdge(int a, int b) const {
   if (!mesh_.fixed[a] || !mesh_.fixed[b]) return false;
-  for (int t : mesh_.Ring(a)) {
-    const int k = mesh_.CornerOf(t, b);
-    if (k >= 0) return mesh_.kind[t][3 - k - mesh_.CornerOf(t, a)] != EdgeKind::kFree;
-  }
-  return false;  // not an edge yet: one that an operation makes, inside the face
+  // Not an edge yet: one that an operation makes, inside the face.
+  EdgeKind kind;
+  return mesh_.EdgeKindOf(a, b, &kind) && kind != EdgeKind::kFree;
 }
 
 bool Refiner::SplitOk(double child_min, const std::vector<int>& parents) const {
