@@ -119,6 +119,7 @@ class LentSurface final : public Surface {
   explicit LentSurface(Surface* inner) : inner_(inner) {
     umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
     uknots = inner_->uknots, vknots = inner_->vknots;
+    quadric = inner_->quadric;
   }
   Vec3 Point(double u, double v) override { return inner_->Point(u, v); }
   Vec3 Normal(double u, double v) override { return inner_->Normal(u, v); }

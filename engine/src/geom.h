@@ -62,4 +62,33 @@ inline double PointTriangleDistance(Vec3 p, Vec3 a, Vec3 b, Vec3 c) {
                    PointSegmentDistance(p, c, a)});
 }
 
+/// The point of the closed triangle (a, b, c) nearest to p, as its barycentric weights w[] of a,
+/// b and c; returns its distance to p. Handles degenerate triangles (the nearest edge point).
+inline double ClosestOnTriangle(Vec3 p, Vec3 a, Vec3 b, Vec3 c, double w[3]) {
+  Vec3 n = Cross(b - a, c - a);
+  double n2 = Dot(n, n);
+  double scale = std::max({Dot(b - a, b - a), Dot(c - a, c - a), Dot(c - b, c - b)});
+  if (n2 > 1e-24 * scale * scale) {
+    double wa = Dot(Cross(c - b, p - b), n) / n2, wb = Dot(Cross(a - c, p - c), n) / n2;
+    double wc = 1 - wa - wb;
+    if (wa >= 0 && wb >= 0 && wc >= 0) {
+      w[0] = wa, w[1] = wb, w[2] = wc;
+      return Dist(p, wa * a + (wb * b + wc * c));
+    }
+  }
+  const Vec3 corner[3] = {a, b, c};
+  double best = HUGE_VAL;
+  for (int i = 0; i < 3; ++i) {
+    Vec3 s = corner[i], e = corner[(i + 1) % 3] - s;
+    double len2 = Dot(e, e);
+    double t = len2 > 0 ? std::clamp(Dot(p - s, e) / len2, 0.0, 1.0) : 0.0;
+    double d = Dist(p, s + t * e);
+    if (d < best) {
+      best = d;
+      w[i] = 1 - t, w[(i + 1) % 3] = t, w[(i + 2) % 3] = 0;
+    }
+  }
+  return best;
+}
+
 }  // namespace rdmesh

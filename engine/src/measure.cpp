@@ -203,6 +203,37 @@ double KnotPeak(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec3 nh, Vec2* wh
 
 namespace {
 
+// The largest distance of the triangle p[] from a sphere or cylinder: inward, R less the distance
+// of its point nearest to the centre (axis), or outward, a corner's distance less R (the corners
+// lie on the surface up to the B-rep's tolerance). Into peak[], the barycentric weights of where.
+double QuadricDeviation(const Surface::Quadric& q, const Vec3 p[3], double peak[3]) {
+  Vec3 x[3];  // relative to the centre; for a cylinder, across its axis
+  for (int i = 0; i < 3; ++i) {
+    x[i] = p[i] - q.center;
+    if (q.kind == Surface::Quadric::Kind::kCylinder) x[i] = x[i] - Dot(x[i], q.axis) * q.axis;
+  }
+  double dev = q.radius - ClosestOnTriangle(Vec3{}, x[0], x[1], x[2], peak);
+  for (int i = 0; i < 3; ++i) {
+    double outward = Norm(x[i]) - q.radius;
+    if (outward > dev) {
+      dev = outward;
+      peak[0] = peak[1] = peak[2] = 0, peak[i] = 1;
+    }
+  }
+  return std::max(dev, 0.0);
+}
+
+// Sets m->deviation to dev and m->violation to the largest of the criteria's ratios.
+void Conclude(const FaceCriteria& c, double dev, TriangleMeasure* m) {
+  m->deviation = dev;
+  double v = 0;
+  if (c.max_deviation > 0) v = std::max(v, dev / c.max_deviation);
+  if (c.rd_tolerance > 0) v = std::max(v, m->rd / c.rd_tolerance);
+  if (c.max_length > 0) v = std::max(v, m->max_length / c.max_length);
+  if (c.min_length > 0 && m->max_length < 2 * c.min_length) v = std::min(v, 1.0);
+  m->violation = v;
+}
+
 // MeasureTriangle's work. With `may_stop` it returns false as soon as the centroid height alone
 // puts the violation at or above `limit` (the fitted peak can only raise the deviation); then
 // m->violation holds that lower bound and nothing else is set. It also returns false, with *m
@@ -212,13 +243,31 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
   TriangleMeasure& m = *out;
   m = TriangleMeasure();
   Vec2 cen_uv = (1.0 / 3.0) * (uv[0] + uv[1] + uv[2]);
-  Vec3 cen = s.Point(cen_uv.x, cen_uv.y);
   Vec3 n = Cross(p[1] - p[0], p[2] - p[0]);
   double area2 = Norm(n);
   double len2 = std::max({Dot(p[1] - p[0], p[1] - p[0]), Dot(p[2] - p[1], p[2] - p[1]),
                           Dot(p[0] - p[2], p[0] - p[2])});
   m.max_length = std::sqrt(len2);
   const bool flat = area2 > 1e-10 * len2;  // not degenerate in 3D
+  if (s.quadric.kind != Surface::Quadric::Kind::kNone &&
+      (flat ||
+       std::min({Dist(p[0], p[1]), Dist(p[1], p[2]), Dist(p[2], p[0])}) > 1e-12 * m.max_length)) {
+    // A sphere or cylinder: the exact deviation, no samples (a pole triangle, two corners at
+    // one point, stands for nothing: it falls through to the case below).
+    double peak[3];
+    double dev = QuadricDeviation(s.quadric, p, peak);
+    m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
+    if (c.rd_tolerance > 0 && flat) {
+      Vec3 cen = s.Point(cen_uv.x, cen_uv.y);
+      double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
+      m.rd = split / (0.5 * area2) - 1.0;
+    } else if (!flat) {
+      m.rd = dev > 0 ? INFINITY : 0;
+    }
+    Conclude(c, dev, &m);
+    return !(may_stop && m.violation >= limit);
+  }
+  Vec3 cen = s.Point(cen_uv.x, cen_uv.y);
   if (may_stop && flat && c.max_deviation > 0 &&
       !(c.min_length > 0 && m.max_length < 2 * c.min_length)) {
     Vec3 nh = (1.0 / area2) * n;
@@ -271,13 +320,7 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
       m.rd = dev > 0 ? INFINITY : 0;
     }
   }
-  m.deviation = dev;
-  double v = 0;
-  if (c.max_deviation > 0) v = std::max(v, dev / c.max_deviation);
-  if (c.rd_tolerance > 0) v = std::max(v, m.rd / c.rd_tolerance);
-  if (c.max_length > 0) v = std::max(v, m.max_length / c.max_length);
-  if (c.min_length > 0 && m.max_length < 2 * c.min_length) v = std::min(v, 1.0);
-  m.violation = v;
+  Conclude(c, dev, &m);
   return !stopped;
 }
 
@@ -319,6 +362,8 @@ double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3
 void MeasureEdgeHeights(Surface& s, const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3],
                         const FaceCriteria& c, int edges, TriangleMeasure* m) {
   if (!(c.max_deviation > 0) || (c.min_length > 0 && m->max_length < 2 * c.min_length)) return;
+  // On a sphere or cylinder MeasureTriangle's deviation is exact already.
+  if (s.quadric.kind != Surface::Quadric::Kind::kNone) return;
   for (int i = 0; i < 3; ++i) {
     if (!(edges >> i & 1)) continue;
     const int a = (i + 1) % 3, b = (i + 2) % 3;

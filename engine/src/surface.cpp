@@ -62,7 +62,9 @@ class PlaneSurface final : public Surface {
 
 class CylinderSurface final : public Surface {
  public:
-  explicit CylinderSurface(double r) : r_(r) {}
+  explicit CylinderSurface(double r) : r_(r) {
+    quadric = {Quadric::Kind::kCylinder, {0, 0, 0}, {0, 0, 1}, r};
+  }
   Vec3 Point(double u, double v) override { return {r_ * std::cos(u), r_ * std::sin(u), v}; }
   Vec3 Normal(double u, double) override { return {std::cos(u), std::sin(u), 0}; }
 
@@ -72,7 +74,9 @@ class CylinderSurface final : public Surface {
 
 class SphereSurface final : public Surface {
  public:
-  explicit SphereSurface(double r) : r_(r) {}
+  explicit SphereSurface(double r) : r_(r) {
+    quadric = {Quadric::Kind::kSphere, {0, 0, 0}, {0, 0, 1}, r};
+  }
   Vec3 Point(double u, double v) override {
     return {r_ * std::cos(v) * std::cos(u), r_ * std::cos(v) * std::sin(u), r_ * std::sin(v)};
   }
@@ -91,6 +95,7 @@ class CachedSurface final : public Surface {
   explicit CachedSurface(std::unique_ptr<Surface> inner) : inner_(std::move(inner)) {
     umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
     uknots = inner_->uknots, vknots = inner_->vknots;
+    quadric = inner_->quadric;
     Resize(kMinBits);
   }
   Vec3 Point(double u, double v) override {
@@ -139,6 +144,7 @@ class CircleCurve final : public Curve {
 };
 
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
+Vec3 ToVec(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }
 
 // S(u,v) of a B-spline surface on one knot span, computed as OCCT's adaptor does it, bit for bit:
 // BSplSLib_Cache's Taylor coefficients of the span (built by BSplSLib::BuildCache for the span
@@ -244,6 +250,7 @@ class OcctSurface final : public Surface {
         frame(adaptor_.Cylinder().Position());
         radius_ = adaptor_.Cylinder().Radius();
         kind_ = Kind::kCylinder;
+        quadric = {Quadric::Kind::kCylinder, ToVec(frame_[3]), ToVec(frame_[2]), radius_};
         break;
       case GeomAbs_Cone: {
         gp_Cone cone = adaptor_.Cone();
@@ -260,6 +267,7 @@ class OcctSurface final : public Surface {
         frame(adaptor_.Sphere().Position());
         radius_ = adaptor_.Sphere().Radius();
         kind_ = Kind::kSphere;
+        quadric = {Quadric::Kind::kSphere, ToVec(frame_[3]), ToVec(frame_[2]), radius_};
         v_trig_.resize(size_t{1} << kTrigBits);
         break;
       default:

@@ -33,6 +33,17 @@ class Surface {
     double period = 0;
   };
   KnotLines uknots, vknots;
+  /// A sphere or a circular cylinder: the distance from a point to it has a closed form, so
+  /// the deviation of a triangle with its corners on it is measured exactly (measure.cpp)
+  /// instead of estimated from samples. kNone for every other surface.
+  struct Quadric {
+    enum class Kind { kNone, kSphere, kCylinder };
+    Kind kind = Kind::kNone;
+    Vec3 center;  ///< a sphere's centre; a point on a cylinder's axis
+    Vec3 axis;    ///< a cylinder's unit axis direction
+    double radius = 0;
+  };
+  Quadric quadric;
 };
 
 /// A parametric curve C(t) in world coordinates.

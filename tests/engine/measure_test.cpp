@@ -1,6 +1,6 @@
 // Triangle measures: the early stop of MeasureTriangleBelow is a true lower bound, and when it
 // measures in full it gives exactly MeasureTriangle's result; on a B-spline the estimate sees
-// what happens between knot lines.
+// what happens between knot lines; on a sphere or cylinder the deviation is exact.
 #include "measure.h"
 
 #include <gtest/gtest.h>
@@ -137,6 +137,64 @@ TEST(MeasureTest, SeesBothHalvesOfOnePiece) {
     low += UnderReads(*wave, c, u0, u1, v0, v1, where, width(shapes));
   }
   EXPECT_EQ(low, 0);
+}
+
+TEST(MeasureTest, ClosestOnTriangleFindsInteriorEdgeAndCornerPoints) {
+  const Vec3 a{0, 0, 0}, b{2, 0, 0}, c{0, 2, 0};
+  double w[3];
+  EXPECT_DOUBLE_EQ(ClosestOnTriangle({0.5, 0.5, 3}, a, b, c, w), 3.0);  // above the inside
+  EXPECT_DOUBLE_EQ(w[0], 0.5);
+  EXPECT_DOUBLE_EQ(w[1], 0.25);
+  EXPECT_DOUBLE_EQ(w[2], 0.25);
+  EXPECT_DOUBLE_EQ(ClosestOnTriangle({1, -1, 0}, a, b, c, w), 1.0);  // beyond edge a-b
+  EXPECT_DOUBLE_EQ(w[0], 0.5);
+  EXPECT_DOUBLE_EQ(w[1], 0.5);
+  EXPECT_DOUBLE_EQ(w[2], 0.0);
+  EXPECT_DOUBLE_EQ(ClosestOnTriangle({3, 0, 0}, a, b, c, w), 1.0);  // beyond corner b
+  EXPECT_DOUBLE_EQ(w[1], 1.0);
+  // Degenerate: three points on a line, the nearest point of the segment they span.
+  EXPECT_DOUBLE_EQ(ClosestOnTriangle({1.5, 1, 0}, a, {1, 0, 0}, b, w), 1.0);
+  EXPECT_NEAR(w[0] * 0 + w[1] * 1 + w[2] * 2, 1.5, 1e-12);
+}
+
+// The largest distance from the triangle's points to the surface r(x) = radius, densely
+// sampled, where r is the distance to the centre (sphere) or to the z axis (cylinder).
+double DenseRadialDeviation(const Vec3 p[3], double radius, bool cylinder) {
+  double worst = 0;
+  const int n = 80;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; i + j <= n; ++j) {
+      double b1 = double(i) / n, b2 = double(j) / n;
+      Vec3 x = (1 - b1 - b2) * p[0] + (b1 * p[1] + b2 * p[2]);
+      double r = cylinder ? std::hypot(x.x, x.y) : Norm(x);
+      worst = std::max(worst, std::fabs(radius - r));
+    }
+  return worst;
+}
+
+TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
+  for (bool cylinder : {false, true}) {
+    const double radius = 2.5;
+    std::unique_ptr<Surface> s = cylinder ? MakeCylinderSurface(radius) : MakeSphereSurface(radius);
+    FaceCriteria c;
+    c.max_deviation = 1e-3;
+    std::mt19937 rng(cylinder ? 17 : 19);
+    std::uniform_real_distribution<double> u(0, 6), v(-1.2, 1.2), size(1e-2, 0.6);
+    for (int i = 0; i < 300; ++i) {
+      Vec2 q0{u(rng), v(rng)};
+      double h = size(rng);
+      std::uniform_real_distribution<double> d(-h, h);
+      Vec2 uv[3] = {q0, {q0.x + d(rng), q0.y + d(rng)}, {q0.x + d(rng), q0.y + d(rng)}};
+      if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
+      Vec3 p[3];
+      for (int k = 0; k < 3; ++k) p[k] = s->Point(uv[k].x, uv[k].y);
+      TriangleMeasure m = MeasureTriangle(*s, uv, p, c);
+      double dense = DenseRadialDeviation(p, radius, cylinder);
+      // Never below any sampled point, and the samples come within 2% of it.
+      EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << (cylinder ? "cylinder " : "sphere ") << i;
+      EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << (cylinder ? "cylinder " : "sphere ") << i;
+    }
+  }
 }
 
 }  // namespace
