@@ -203,6 +203,47 @@ double KnotPeak(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec3 nh, Vec2* wh
 
 namespace {
 
+// The largest distance of the triangle p[] from a cone, inward or outward: for a point at
+// height z along the axis and distance rho from it, (R + z tan a - rho) cos a inward, where R +
+// z tan a > 0 (this side of the apex). That is concave over the triangle, whose plane meets the
+// axis outside it, so its largest value lies on an edge; along an edge it is concave in the edge
+// parameter, largest where (y . e) / |y| = ez tan a (y the point across the axis, e and ez the
+// edge's parts across and along it): a quadratic. Outward (convex), at a corner. Into peak[],
+// the barycentric weights of where. -1 where a corner lies beyond the apex: not measured here.
+double ConeDeviation(const Surface::Quadric& q, const Vec3 p[3], double peak[3]) {
+  Vec3 y[3];
+  double z[3];
+  const double tan_a = q.cone_sin / q.cone_cos;
+  for (int i = 0; i < 3; ++i) {
+    Vec3 d = p[i] - q.center;
+    z[i] = Dot(d, q.axis);
+    y[i] = d - z[i] * q.axis;
+    if (!(q.radius + z[i] * tan_a > 0)) return -1;
+  }
+  auto inward = [&](Vec3 yy, double zz) { return (q.radius + zz * tan_a - Norm(yy)) * q.cone_cos; };
+  double dev = -HUGE_VAL;
+  for (int i = 0; i < 3; ++i) {
+    double outward = -inward(y[i], z[i]);
+    if (outward > dev) dev = outward, peak[0] = peak[1] = peak[2] = 0, peak[i] = 1;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    const Vec3 e = y[j] - y[i];
+    const double ez = z[j] - z[i], E = Dot(e, e), B = Dot(y[i], e), Y = Dot(y[i], y[i]);
+    const double k = ez * tan_a, denom = E * (E - k * k);
+    if (!(E > 0) || !(std::fabs(denom) > 1e-300)) continue;
+    // E (E - k^2) l^2 + 2 B (E - k^2) l + B^2 - k^2 Y = 0, roots where B + l E has k's sign.
+    const double half = B / E, disc = half * half - (B * B - k * k * Y) / denom;
+    if (!(disc >= 0)) continue;
+    for (double l : {-half - std::sqrt(disc), -half + std::sqrt(disc)}) {
+      if (!(l > 0 && l < 1) || (B + l * E) * k < 0) continue;
+      double g = inward(y[i] + l * e, z[i] + l * ez);
+      if (g > dev) dev = g, peak[0] = peak[1] = peak[2] = 0, peak[i] = 1 - l, peak[j] = l;
+    }
+  }
+  return std::max(dev, 0.0);
+}
+
 // The largest distance of the triangle p[] from a sphere or cylinder: inward, R less the distance
 // of its point nearest to the centre (axis), or outward, a corner's distance less R (the corners
 // lie on the surface up to the B-rep's tolerance). Into peak[], the barycentric weights of where.
@@ -249,13 +290,18 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
                           Dot(p[0] - p[2], p[0] - p[2])});
   m.max_length = std::sqrt(len2);
   const bool flat = area2 > 1e-10 * len2;  // not degenerate in 3D
+  // A sphere, cylinder or cone: the exact deviation, no samples (a pole triangle, two corners
+  // at one point, stands for nothing: it falls through to the case below, as does a triangle
+  // on a cone beyond its apex).
+  double peak[3], dev = -1;
   if (s.quadric.kind != Surface::Quadric::Kind::kNone &&
       (flat ||
        std::min({Dist(p[0], p[1]), Dist(p[1], p[2]), Dist(p[2], p[0])}) > 1e-12 * m.max_length)) {
-    // A sphere or cylinder: the exact deviation, no samples (a pole triangle, two corners at
-    // one point, stands for nothing: it falls through to the case below).
-    double peak[3];
-    double dev = QuadricDeviation(s.quadric, p, peak);
+    dev = s.quadric.kind == Surface::Quadric::Kind::kCone ? ConeDeviation(s.quadric, p, peak)
+                                                          : QuadricDeviation(s.quadric, p, peak);
+  }
+  if (dev >= 0) {
+    m.exact = true;
     m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
     if (c.rd_tolerance > 0 && flat) {
       Vec3 cen = s.Point(cen_uv.x, cen_uv.y);
@@ -282,14 +328,13 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
     Vec2 mid_uv = 0.5 * (uv[(i + 1) % 3] + uv[(i + 2) % 3]);
     mid[i] = s.Point(mid_uv.x, mid_uv.y);
   }
-  double dev = 0;
+  dev = 0;
   bool stopped = false;  // skipped the knot samples, known to violate the limit
   m.worst_uv = cen_uv;
   if (flat) {
     // Heights of the surface over the triangle's plane: at the centroid, and the peak of the
     // quadratic through the edge midpoints (exact for a quadratic patch).
     Vec3 nh = (1.0 / area2) * n;
-    double peak[3];
     dev = FittedPeak(p, nh, mid, peak);
     m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
     double hc = std::fabs(Dot(nh, cen - p[0]));
@@ -362,8 +407,7 @@ double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3
 void MeasureEdgeHeights(Surface& s, const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3],
                         const FaceCriteria& c, int edges, TriangleMeasure* m) {
   if (!(c.max_deviation > 0) || (c.min_length > 0 && m->max_length < 2 * c.min_length)) return;
-  // On a sphere or cylinder MeasureTriangle's deviation is exact already.
-  if (s.quadric.kind != Surface::Quadric::Kind::kNone) return;
+  if (m->exact) return;  // nothing to add
   for (int i = 0; i < 3; ++i) {
     if (!(edges >> i & 1)) continue;
     const int a = (i + 1) % 3, b = (i + 2) % 3;

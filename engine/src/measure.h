@@ -29,6 +29,8 @@ struct TriangleMeasure {
   double violation = 0;   ///< max over criteria of value / limit: <= 1 meets them all
   double agreement = 1;   ///< TriangleAgreement, when the caller measured it
   Vec2 worst_uv;          ///< where the deviation peaks (a good split point)
+  bool exact = false;     ///< the deviation is the surface's exact distance (sphere,
+                          ///< cylinder, cone: Surface::quadric), not an estimate from samples
 };
 
 /// Measures the triangle with corners uv[i] / xyz[i] (xyz are the nodes' mesh positions).

@@ -261,6 +261,12 @@ class OcctSurface final : public Surface {
         cone_sin_ = std::sin(cone.SemiAngle());
         cone_cos_ = std::cos(cone.SemiAngle());
         kind_ = Kind::kCone;
+        quadric = {Quadric::Kind::kCone,
+                   ToVec(frame_[3]),
+                   ToVec(frame_[2]),
+                   radius_,
+                   cone_sin_,
+                   cone_cos_};
         break;
       }
       case GeomAbs_Sphere:

@@ -33,15 +33,17 @@ class Surface {
     double period = 0;
   };
   KnotLines uknots, vknots;
-  /// A sphere or a circular cylinder: the distance from a point to it has a closed form, so
-  /// the deviation of a triangle with its corners on it is measured exactly (measure.cpp)
-  /// instead of estimated from samples. kNone for every other surface.
+  /// A sphere, circular cylinder or circular cone: the distance from a point to it has a closed
+  /// form, so the deviation of a triangle with its corners on it is measured exactly
+  /// (measure.cpp) instead of estimated from samples. kNone for every other surface.
   struct Quadric {
-    enum class Kind { kNone, kSphere, kCylinder };
+    enum class Kind { kNone, kSphere, kCylinder, kCone };
     Kind kind = Kind::kNone;
-    Vec3 center;  ///< a sphere's centre; a point on a cylinder's axis
-    Vec3 axis;    ///< a cylinder's unit axis direction
-    double radius = 0;
+    Vec3 center;        ///< a sphere's centre; a point on a cylinder's or cone's axis
+    Vec3 axis;          ///< a cylinder's or cone's unit axis direction
+    double radius = 0;  ///< a cone's radius at `center`
+    double cone_sin = 0, cone_cos = 1;  ///< of a cone's semi-angle (its radius grows by
+                                        ///< tan(angle) per unit along the axis)
   };
   Quadric quadric;
 };

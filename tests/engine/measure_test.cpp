@@ -7,6 +7,7 @@
 
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <Geom_ConicalSurface.hxx>
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array2OfPnt.hxx>
@@ -194,6 +195,46 @@ TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
       EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << (cylinder ? "cylinder " : "sphere ") << i;
       EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << (cylinder ? "cylinder " : "sphere ") << i;
     }
+  }
+}
+
+TEST(MeasureTest, ConeDeviationIsExact) {
+  // Semi-angles both ways (the radius growing and shrinking along the axis), reference radius 2.
+  for (double angle : {0.5, -0.3}) {
+    Handle(Geom_ConicalSurface) cone = new Geom_ConicalSurface(gp_Ax3(), angle, 2.0);
+    std::unique_ptr<Surface> s =
+        MakeFaceSurface(BRepBuilderAPI_MakeFace(cone, 0, 2 * M_PI, -1.5, 1.5, 1e-7).Face(), false);
+    ASSERT_EQ(s->quadric.kind, Surface::Quadric::Kind::kCone);
+    FaceCriteria c;
+    c.max_deviation = 1e-3;
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<double> u(0, 6), v(-1.2, 1.2), size(1e-2, 0.6);
+    int exact = 0;
+    for (int i = 0; i < 500; ++i) {
+      Vec2 q0{u(rng), v(rng)};
+      double h = size(rng);
+      std::uniform_real_distribution<double> d(-h, h);
+      Vec2 uv[3] = {q0, {q0.x + d(rng), q0.y + d(rng)}, {q0.x + d(rng), q0.y + d(rng)}};
+      if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
+      Vec3 p[3];
+      for (int k = 0; k < 3; ++k) p[k] = s->Point(uv[k].x, uv[k].y);
+      TriangleMeasure m = MeasureTriangle(*s, uv, p, c);
+      if (!m.exact) continue;  // beyond the apex: the estimate
+      ++exact;
+      // Distance to the cone's generator in the point's meridian plane, densely sampled.
+      double dense = 0;
+      const int n = 80;
+      for (int a = 0; a <= n; ++a)
+        for (int b = 0; a + b <= n; ++b) {
+          double b1 = double(a) / n, b2 = double(b) / n;
+          Vec3 x = (1 - b1 - b2) * p[0] + (b1 * p[1] + b2 * p[2]);
+          double off = (2.0 + x.z * std::tan(angle) - std::hypot(x.x, x.y)) * std::cos(angle);
+          dense = std::max(dense, std::fabs(off));
+        }
+      EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << angle << " " << i;
+      EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << angle << " " << i;
+    }
+    EXPECT_GT(exact, 400);
   }
 }
 
