@@ -158,19 +158,29 @@ TEST(MeasureTest, ClosestOnTriangleFindsInteriorEdgeAndCornerPoints) {
   EXPECT_NEAR(w[0] * 0 + w[1] * 1 + w[2] * 2, 1.5, 1e-12);
 }
 
-// The largest distance from the triangle's points to the surface r(x) = radius, densely
-// sampled, where r is the distance to the centre (sphere) or to the z axis (cylinder).
-double DenseRadialDeviation(const Vec3 p[3], double radius, bool cylinder) {
+// The largest |offset(x)| over points x of the triangle p[], densely sampled.
+template <typename Offset>
+double DenseMaxOffset(const Vec3 p[3], Offset offset) {
   double worst = 0;
   const int n = 80;
   for (int i = 0; i <= n; ++i)
     for (int j = 0; i + j <= n; ++j) {
       double b1 = double(i) / n, b2 = double(j) / n;
-      Vec3 x = (1 - b1 - b2) * p[0] + (b1 * p[1] + b2 * p[2]);
-      double r = cylinder ? std::hypot(x.x, x.y) : Norm(x);
-      worst = std::max(worst, std::fabs(radius - r));
+      worst = std::max(worst, std::fabs(offset((1 - b1 - b2) * p[0] + (b1 * p[1] + b2 * p[2]))));
     }
   return worst;
+}
+
+// A random triangle on s, corners within a square of up to 0.6 around a point of
+// [0, 6] x [-1.2, 1.2], counter-clockwise in (u,v).
+void RandomTriangle(Surface& s, std::mt19937& rng, Vec2 uv[3], Vec3 p[3]) {
+  std::uniform_real_distribution<double> u(0, 6), v(-1.2, 1.2), size(1e-2, 0.6);
+  Vec2 q0{u(rng), v(rng)};
+  double h = size(rng);
+  std::uniform_real_distribution<double> d(-h, h);
+  uv[0] = q0, uv[1] = {q0.x + d(rng), q0.y + d(rng)}, uv[2] = {q0.x + d(rng), q0.y + d(rng)};
+  if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
+  for (int k = 0; k < 3; ++k) p[k] = s.Point(uv[k].x, uv[k].y);
 }
 
 TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
@@ -180,17 +190,13 @@ TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
     FaceCriteria c;
     c.max_deviation = 1e-3;
     std::mt19937 rng(cylinder ? 17 : 19);
-    std::uniform_real_distribution<double> u(0, 6), v(-1.2, 1.2), size(1e-2, 0.6);
     for (int i = 0; i < 300; ++i) {
-      Vec2 q0{u(rng), v(rng)};
-      double h = size(rng);
-      std::uniform_real_distribution<double> d(-h, h);
-      Vec2 uv[3] = {q0, {q0.x + d(rng), q0.y + d(rng)}, {q0.x + d(rng), q0.y + d(rng)}};
-      if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
+      Vec2 uv[3];
       Vec3 p[3];
-      for (int k = 0; k < 3; ++k) p[k] = s->Point(uv[k].x, uv[k].y);
+      RandomTriangle(*s, rng, uv, p);
       TriangleMeasure m = MeasureTriangle(*s, uv, p, c);
-      double dense = DenseRadialDeviation(p, radius, cylinder);
+      double dense = DenseMaxOffset(
+          p, [&](Vec3 x) { return radius - (cylinder ? std::hypot(x.x, x.y) : Norm(x)); });
       // Never below any sampled point, and the samples come within 2% of it.
       EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << (cylinder ? "cylinder " : "sphere ") << i;
       EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << (cylinder ? "cylinder " : "sphere ") << i;
@@ -208,29 +214,18 @@ TEST(MeasureTest, ConeDeviationIsExact) {
     FaceCriteria c;
     c.max_deviation = 1e-3;
     std::mt19937 rng(29);
-    std::uniform_real_distribution<double> u(0, 6), v(-1.2, 1.2), size(1e-2, 0.6);
     int exact = 0;
     for (int i = 0; i < 500; ++i) {
-      Vec2 q0{u(rng), v(rng)};
-      double h = size(rng);
-      std::uniform_real_distribution<double> d(-h, h);
-      Vec2 uv[3] = {q0, {q0.x + d(rng), q0.y + d(rng)}, {q0.x + d(rng), q0.y + d(rng)}};
-      if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
+      Vec2 uv[3];
       Vec3 p[3];
-      for (int k = 0; k < 3; ++k) p[k] = s->Point(uv[k].x, uv[k].y);
+      RandomTriangle(*s, rng, uv, p);
       TriangleMeasure m = MeasureTriangle(*s, uv, p, c);
       if (!m.exact) continue;  // beyond the apex: the estimate
       ++exact;
       // Distance to the cone's generator in the point's meridian plane, densely sampled.
-      double dense = 0;
-      const int n = 80;
-      for (int a = 0; a <= n; ++a)
-        for (int b = 0; a + b <= n; ++b) {
-          double b1 = double(a) / n, b2 = double(b) / n;
-          Vec3 x = (1 - b1 - b2) * p[0] + (b1 * p[1] + b2 * p[2]);
-          double off = (2.0 + x.z * std::tan(angle) - std::hypot(x.x, x.y)) * std::cos(angle);
-          dense = std::max(dense, std::fabs(off));
-        }
+      double dense = DenseMaxOffset(p, [&](Vec3 x) {
+        return (2.0 + x.z * std::tan(angle) - std::hypot(x.x, x.y)) * std::cos(angle);
+      });
       EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << angle << " " << i;
       EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << angle << " " << i;
     }
