@@ -203,64 +203,71 @@ double KnotPeak(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec3 nh, Vec2* wh
 
 namespace {
 
-// The largest distance of the triangle p[] from a cone, inward or outward: for a point at
-// height z along the axis and distance rho from it, (R + z tan a - rho) cos a inward, where R +
-// z tan a > 0 (this side of the apex). That is concave over the triangle, whose plane meets the
-// axis outside it, so its largest value lies on an edge; along an edge it is concave in the edge
-// parameter, largest where (y . e) / |y| = ez tan a (y the point across the axis, e and ez the
-// edge's parts across and along it): a quadratic. Outward (convex), at a corner. Into peak[],
-// the barycentric weights of where. -1 where a corner lies beyond the apex: not measured here.
-double ConeDeviation(const Surface::Quadric& q, const Vec3 p[3], double peak[3]) {
+// Corners lie on the surface but for boundary nodes, which lie on edge curves, within the
+// B-rep's tolerance of it. The deviations below are measured from the plane of the corners'
+// offsets (less the offsets interpolated linearly), as the estimate for other surfaces measures
+// heights over the corners' plane: what refinement can change. Where a corner lies off by more
+// than kExactCornerOffset of the request, the corners' offsets are a part of the deviation that
+// no refinement removes; there the estimate is kept (its edge heights see part of it), and the
+// functions below return -1.
+constexpr double kExactCornerOffset = 0.01;
+
+// The largest distance of the triangle p[] from a cone: for a point at height z along the axis
+// and distance rho from it, (R + z tan a - rho) cos a inward, where R + z tan a > 0 (this side of
+// the apex). Less a linear function, that is concave over a triangle whose plane meets the axis
+// outside it, so its largest value lies on an edge; along an edge it is concave in the edge
+// parameter, largest where (y . e) / |y| = k (y the point across the axis, e the edge across it,
+// k from the edge's rise and its corners' offsets): a quadratic. Into peak[], the barycentric
+// weights of where. -1 where a corner lies beyond the apex or off the surface: not measured.
+double ConeDeviation(const Surface::Quadric& q, const Vec3 p[3], double offset_limit,
+                     double peak[3]) {
   Vec3 y[3];
-  double z[3];
+  double z[3], f[3];
   const double tan_a = q.cone_sin / q.cone_cos;
+  auto inward = [&](Vec3 yy, double zz) { return (q.radius + zz * tan_a - Norm(yy)) * q.cone_cos; };
   for (int i = 0; i < 3; ++i) {
     Vec3 d = p[i] - q.center;
     z[i] = Dot(d, q.axis);
     y[i] = d - z[i] * q.axis;
     if (!(q.radius + z[i] * tan_a > 0)) return -1;
+    f[i] = inward(y[i], z[i]);
+    if (!(std::fabs(f[i]) <= offset_limit)) return -1;
   }
-  auto inward = [&](Vec3 yy, double zz) { return (q.radius + zz * tan_a - Norm(yy)) * q.cone_cos; };
-  double dev = -HUGE_VAL;
-  for (int i = 0; i < 3; ++i) {
-    double outward = -inward(y[i], z[i]);
-    if (outward > dev) dev = outward, peak[0] = peak[1] = peak[2] = 0, peak[i] = 1;
-  }
+  double dev = 0;
+  peak[0] = peak[1] = peak[2] = 1.0 / 3;
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3;
     const Vec3 e = y[j] - y[i];
     const double ez = z[j] - z[i], E = Dot(e, e), B = Dot(y[i], e), Y = Dot(y[i], y[i]);
-    const double k = ez * tan_a, denom = E * (E - k * k);
+    const double k = ez * tan_a - (f[j] - f[i]) / q.cone_cos, denom = E * (E - k * k);
     if (!(E > 0) || !(std::fabs(denom) > 1e-300)) continue;
     // E (E - k^2) l^2 + 2 B (E - k^2) l + B^2 - k^2 Y = 0, roots where B + l E has k's sign.
     const double half = B / E, disc = half * half - (B * B - k * k * Y) / denom;
     if (!(disc >= 0)) continue;
     for (double l : {-half - std::sqrt(disc), -half + std::sqrt(disc)}) {
       if (!(l > 0 && l < 1) || (B + l * E) * k < 0) continue;
-      double g = inward(y[i] + l * e, z[i] + l * ez);
+      double g = inward(y[i] + l * e, z[i] + l * ez) - ((1 - l) * f[i] + l * f[j]);
       if (g > dev) dev = g, peak[0] = peak[1] = peak[2] = 0, peak[i] = 1 - l, peak[j] = l;
     }
   }
-  return std::max(dev, 0.0);
+  return dev;
 }
 
-// The largest distance of the triangle p[] from a sphere or cylinder: inward, R less the distance
-// of its point nearest to the centre (axis), or outward, a corner's distance less R (the corners
-// lie on the surface up to the B-rep's tolerance). Into peak[], the barycentric weights of where.
-double QuadricDeviation(const Surface::Quadric& q, const Vec3 p[3], double peak[3]) {
+// The largest distance of the triangle p[] from a sphere or cylinder, inward: R less the
+// distance of its point nearest to the centre (axis), less the corners' offsets there. Into
+// peak[], the barycentric weights of where; -1 where a corner lies off the surface.
+double QuadricDeviation(const Surface::Quadric& q, const Vec3 p[3], double offset_limit,
+                        double peak[3]) {
   Vec3 x[3];  // relative to the centre; for a cylinder, across its axis
+  double f[3];
   for (int i = 0; i < 3; ++i) {
     x[i] = p[i] - q.center;
     if (q.kind == Surface::Quadric::Kind::kCylinder) x[i] = x[i] - Dot(x[i], q.axis) * q.axis;
+    f[i] = q.radius - Norm(x[i]);
+    if (!(std::fabs(f[i]) <= offset_limit)) return -1;
   }
   double dev = q.radius - ClosestOnTriangle(Vec3{}, x[0], x[1], x[2], peak);
-  for (int i = 0; i < 3; ++i) {
-    double outward = Norm(x[i]) - q.radius;
-    if (outward > dev) {
-      dev = outward;
-      peak[0] = peak[1] = peak[2] = 0, peak[i] = 1;
-    }
-  }
+  for (int i = 0; i < 3; ++i) dev -= peak[i] * f[i];
   return std::max(dev, 0.0);
 }
 
@@ -291,14 +298,17 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
   m.max_length = std::sqrt(len2);
   const bool flat = area2 > 1e-10 * len2;  // not degenerate in 3D
   // A sphere, cylinder or cone: the exact deviation, no samples (a pole triangle, two corners
-  // at one point, stands for nothing: it falls through to the case below, as does a triangle
-  // on a cone beyond its apex).
+  // at one point, stands for nothing: it falls through to the case below, as do a triangle on
+  // a cone beyond its apex and one with a corner off the surface).
   double peak[3], dev = -1;
   if (s.quadric.kind != Surface::Quadric::Kind::kNone &&
       (flat ||
        std::min({Dist(p[0], p[1]), Dist(p[1], p[2]), Dist(p[2], p[0])}) > 1e-12 * m.max_length)) {
-    dev = s.quadric.kind == Surface::Quadric::Kind::kCone ? ConeDeviation(s.quadric, p, peak)
-                                                          : QuadricDeviation(s.quadric, p, peak);
+    const double offset_limit =
+        c.max_deviation > 0 ? kExactCornerOffset * c.max_deviation : HUGE_VAL;
+    dev = s.quadric.kind == Surface::Quadric::Kind::kCone
+              ? ConeDeviation(s.quadric, p, offset_limit, peak)
+              : QuadricDeviation(s.quadric, p, offset_limit, peak);
   }
   if (dev >= 0) {
     m.exact = true;
