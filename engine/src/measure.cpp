@@ -277,6 +277,13 @@ double QuadricDeviation(const Surface::Quadric& q, const Vec3 p[3], double offse
   return std::max(dev, 0.0);
 }
 
+// The representation deficit a split at the surface point `cen` above the centroid removes: the
+// three triangles' area over the triangle's (area2 is twice its area).
+double CentroidSplitRd(const Vec3 p[3], Vec3 cen, double area2) {
+  double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
+  return split / (0.5 * area2) - 1.0;
+}
+
 // Sets m->deviation to dev and m->violation to the largest of the criteria's ratios.
 void Conclude(const FaceCriteria& c, double dev, TriangleMeasure* m) {
   m->deviation = dev;
@@ -320,9 +327,7 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
     m.exact = true;
     m.worst_uv = peak[0] * uv[0] + (peak[1] * uv[1] + peak[2] * uv[2]);
     if (c.rd_tolerance > 0 && flat) {
-      Vec3 cen = s.Point(cen_uv.x, cen_uv.y);
-      double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
-      m.rd = split / (0.5 * area2) - 1.0;
+      m.rd = CentroidSplitRd(p, s.Point(cen_uv.x, cen_uv.y), area2);
     } else if (!flat) {
       m.rd = dev > 0 ? INFINITY : 0;
     }
@@ -366,10 +371,7 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
     } else if (may_stop && dev >= gate && dev < c.max_deviation) {
       stopped = true;
     }
-    if (c.rd_tolerance > 0) {
-      double split = Area(p[0], p[1], cen) + Area(p[1], p[2], cen) + Area(p[2], p[0], cen);
-      m.rd = split / (0.5 * area2) - 1.0;
-    }
+    if (c.rd_tolerance > 0) m.rd = CentroidSplitRd(p, cen, area2);
   } else {
     // Degenerate in 3D. At a pole (two corners at one point) it vanishes from the output and
     // stands for nothing; otherwise it is a sliver: measure the surface against its segment.

@@ -12,6 +12,7 @@
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array2OfPnt.hxx>
 #include <random>
+#include <string>
 
 namespace rdmesh {
 namespace {
@@ -183,6 +184,19 @@ void RandomTriangle(Surface& s, std::mt19937& rng, Vec2 uv[3], Vec3 p[3]) {
   for (int k = 0; k < 3; ++k) p[k] = s.Point(uv[k].x, uv[k].y);
 }
 
+// The exact measure is never below a densely sampled point, and the samples come within 2% of it.
+void ExpectMatchesDense(const TriangleMeasure& m, double dense, const std::string& what) {
+  EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << what;
+  EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << what;
+}
+
+// Inward distance of x from the cone of reference radius 2 and semi-angle `angle` about the axis
+// through o along the unit a: in x's meridian plane, from the cone's generator.
+double ConeOffset(Vec3 x, Vec3 o, Vec3 a, double angle) {
+  const double z = Dot(x - o, a);
+  return (2.0 + z * std::tan(angle) - Norm((x - o) - z * a)) * std::cos(angle);
+}
+
 TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
   for (bool cylinder : {false, true}) {
     const double radius = 2.5;
@@ -197,9 +211,7 @@ TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
       TriangleMeasure m = MeasureTriangle(*s, uv, p, c);
       double dense = DenseMaxOffset(
           p, [&](Vec3 x) { return radius - (cylinder ? std::hypot(x.x, x.y) : Norm(x)); });
-      // Never below any sampled point, and the samples come within 2% of it.
-      EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << (cylinder ? "cylinder " : "sphere ") << i;
-      EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << (cylinder ? "cylinder " : "sphere ") << i;
+      ExpectMatchesDense(m, dense, (cylinder ? "cylinder " : "sphere ") + std::to_string(i));
     }
   }
 }
@@ -222,12 +234,10 @@ TEST(MeasureTest, ConeDeviationIsExact) {
       TriangleMeasure m = MeasureTriangle(*s, uv, p, c);
       if (!m.exact) continue;  // beyond the apex: the estimate
       ++exact;
-      // Distance to the cone's generator in the point's meridian plane, densely sampled.
       double dense = DenseMaxOffset(p, [&](Vec3 x) {
-        return (2.0 + x.z * std::tan(angle) - std::hypot(x.x, x.y)) * std::cos(angle);
+        return ConeOffset(x, {0, 0, 0}, {0, 0, 1}, angle);
       });
-      EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << angle << " " << i;
-      EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << angle << " " << i;
+      ExpectMatchesDense(m, dense, std::to_string(angle) + " " + std::to_string(i));
     }
     EXPECT_GT(exact, 400);
   }
@@ -255,14 +265,9 @@ TEST(MeasureTest, ConeDeviationIsExactOnEdgesAcrossTheAxis) {
     for (int k = 0; k < 3; ++k) p[k] = s->Point(uv[k].x, uv[k].y);
     TriangleMeasure m = MeasureTriangle(*s, uv, p, c);
     ASSERT_TRUE(m.exact) << i;
-    // Distance from the cone, in the frame of its axis.
     const Vec3 o{1, -2, 3}, a = (1.0 / std::hypot(0.4, 0.9)) * Vec3{0.4, 0, -0.9};
-    double dense = DenseMaxOffset(p, [&](Vec3 x) {
-      const double z = Dot(x - o, a);
-      return (2.0 + z * std::tan(angle) - Norm((x - o) - z * a)) * std::cos(angle);
-    });
-    EXPECT_GE(m.deviation, dense * (1 - 1e-9)) << i;
-    EXPECT_LE(m.deviation, dense * 1.02 + 1e-12) << i;
+    double dense = DenseMaxOffset(p, [&](Vec3 x) { return ConeOffset(x, o, a, angle); });
+    ExpectMatchesDense(m, dense, std::to_string(i));
   }
 }
 
