@@ -377,9 +377,10 @@ def test_msh_parametric_round_trips_the_parameters(run, data_dir, tmp_path):
         map(tuple, mesh.points.tolist()))
 
 
-@pytest.mark.parametrize("name,tol,bound", [("gmsh_periodic_u_cst.step", "1e-4", 1.06),
+@pytest.mark.parametrize("name,tol,bound", [("gmsh_periodic_u_cst.step", "1e-4", 1.05),
                                             ("gmsh_periodic_u_cst.step", "3e-4", 1.05),
-                                            ("gmsh_angled.step", "3e-3", 1.05)])
+                                            ("gmsh_angled.step", "3e-3", 1.05),
+                                            ("gmsh_solid_56.step", "1e-4", 1.05)])
 def test_delivered_deviation_meets_the_request(run, shared_dir, tmp_path, meshbench, name, tol,
                                                bound):
     """Cases that missed the request, each met now, by the engine's estimate and by the yardstick.
@@ -389,8 +390,13 @@ def test_delivered_deviation_meets_the_request(run, shared_dir, tmp_path, meshbe
     off the line (ReshapeByFlip) lets them be split. gmsh_angled at 3e-3 (1.20x): cylinder
     triangles tilted against the surface, whose plane heights missed their edges' sagitta by the
     cosine between the normals (MeasureEdgeHeights). The yardstick finds some 5% more than the
-    estimate at places: periodic_u_cst at 1e-4 measures 1.053x (1.026x before MeasureEdgeHeights
-    moved its nodes), hence its bound of 1.06. Skipped only without the shared corpus."""
+    estimate at places: periodic_u_cst at 1e-4 measured 1.053x (1.026x before MeasureEdgeHeights
+    moved its nodes), an interior edge's height along its corners' mean normal short of its
+    sagitta; 0.994x since the edge grids leave room for edge gaps, which moved its nodes again
+    (the estimate is no better). gmsh_solid_56 at 1e-4 (2.08x): a cone edge across
+    the axis whose peak ConeDeviation lost to rounding (face 11), and edge 94's chords, which took
+    the whole deviation though the edge lies 0.019 mm outside face 47's trim (the edge grid now
+    leaves room for that gap). Skipped only without the shared corpus."""
     model = shared_dir / "corpus" / name
     if not model.exists():
         pytest.skip(f"{model} is not there (the shared corpus)")

@@ -7,7 +7,12 @@
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
 #include <GC_MakeArcOfCircle.hxx>
+#include <Geom_Circle.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Wire.hxx>
 #include <algorithm>
@@ -72,6 +77,60 @@ TEST(GridsTest, ChordsOfANarrowFaceStayWithinAFractionOfItsWidth) {
     EXPECT_GT(sagitta, 0.5 * limit);  // no finer than it needs
   }
   EXPECT_EQ(hole_edges, 1);
+}
+
+// A disc of radius 1 in z = 0 whose rim's 3D curve is the same circle lifted to z = `gap` (its
+// pcurve stays on the plane), as in a B-rep whose edges lie off their face within tolerance.
+TopoDS_Face DiscWithLiftedRim(double gap) {
+  gp_Circ circle(gp_Ax2(gp::Origin(), gp::DZ()), 1.0);
+  TopoDS_Face face =
+      BRepBuilderAPI_MakeFace(
+          gp_Pln(gp::XOY()), BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(circle).Edge()).Wire())
+          .Face();
+  TopExp_Explorer ex(face, TopAbs_EDGE);
+  const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+  Handle(Geom_Circle) lifted = new Geom_Circle(gp_Ax2(gp_Pnt(0, 0, gap), gp::DZ()), 1.0);
+  BRep_Builder().UpdateEdge(edge, lifted, std::max(2 * gap, 1e-7));
+  return face;
+}
+
+// The rim lies 0.004 off the disc's plane against a deviation of 0.01: its chords get the 0.006
+// that the gap leaves (29 segments, sagitta 0.0059), not the whole 0.01 (23 segments, 0.0093),
+// which with the gap would put the mesh 0.0133 off the face.
+TEST(GridsTest, ChordsLeaveRoomForTheGapBetweenAnEdgeAndItsFace) {
+  constexpr double kGap = 0.004, kDeviation = 0.01;
+  auto model = LoadShape(DiscWithLiftedRim(kGap), "lifted_rim");
+  ASSERT_TRUE(model);
+  ASSERT_EQ(model->edge_count(), 1);
+  GridCriteria criteria;
+  criteria.max_deviation = kDeviation;
+  std::vector<EdgeGrid> grids;
+  ASSERT_TRUE(BuildEdgeGrids(*model, criteria, 1, {}, nullptr, &grids).ok());
+  const EdgeGrid& g = grids[0];
+  ASSERT_GE(g.xyz.size(), 4u);
+  double sagitta = 0;
+  for (size_t k = 0; k + 1 < g.xyz.size(); ++k) {
+    const Vec3 m = 0.5 * (g.xyz[k] + g.xyz[k + 1]);
+    EXPECT_NEAR(m.z, kGap, 1e-9);
+    sagitta = std::max(sagitta, 1.0 - std::hypot(m.x, m.y));
+  }
+  EXPECT_LE(sagitta, (kDeviation - kGap) * 1.001);
+  EXPECT_GT(sagitta, 0.9 * (kDeviation - kGap));  // no finer than it needs
+}
+
+// Without the gap the same disc keeps the whole deviation for its chords.
+TEST(GridsTest, ChordsOfAnEdgeOnItsFaceTakeTheWholeDeviation) {
+  auto model = LoadShape(DiscWithLiftedRim(0.0), "flat_rim");
+  ASSERT_TRUE(model);
+  GridCriteria criteria;
+  criteria.max_deviation = 0.01;
+  std::vector<EdgeGrid> grids;
+  ASSERT_TRUE(BuildEdgeGrids(*model, criteria, 1, {}, nullptr, &grids).ok());
+  double sagitta = 0;
+  for (size_t k = 0; k + 1 < grids[0].xyz.size(); ++k)
+    sagitta = std::max(sagitta, 1.0 - Norm(0.5 * (grids[0].xyz[k] + grids[0].xyz[k + 1])));
+  EXPECT_LE(sagitta, 0.01 * 1.001);
+  EXPECT_GT(sagitta, 0.9 * 0.01);
 }
 
 }  // namespace
