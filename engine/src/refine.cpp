@@ -347,11 +347,19 @@ bool Refiner::TryFlip(int t, int i, Phase phase) {
   // Both new triangles must keep positive orientation: a cheap test first.
   for (const Tri& nt : tris)
     if (!(Orient(mesh_.uv[nt[0]], mesh_.uv[nt[1]], mesh_.uv[nt[2]]) > 0)) return false;
-  double old_score = MaxViolation(cavity);
-  Candidate cand = Evaluate(tris);
-  if (!AgreementOk(cand.min_agreement, MinAgreement(cavity))) return false;
-  bool better = cand.max_violation < old_score * (1 - 1e-9);
-  if (!better && cand.max_violation <= old_score * (1 + 1e-12) && old_score == 0) {
+  const double old_score = MaxViolation(cavity), old_agree = MinAgreement(cavity);
+  Candidate cand;
+  bool better;
+  if (old_score > 0) {
+    // Wanted only below the old score: measures stop at the first triangle that reaches it (a
+    // candidate that passes is measured in full, as Evaluate would).
+    better = EvaluateBelow(tris, true, old_agree, old_score * (1 - 1e-9), &cand);
+  } else {
+    cand = Evaluate(tris);
+    if (!AgreementOk(cand.min_agreement, old_agree)) return false;
+    better = false;
+  }
+  if (!better && old_score == 0 && cand.max_violation <= 0) {
     // Ties (no criterion bites, e.g. planar): the larger 3D area, else keep.
     double old_area = 0, new_area = 0;
     for (int x : cavity)
