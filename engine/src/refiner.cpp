@@ -82,7 +82,8 @@ void Refiner::PenaliseFold(const Tri& t, double agreement, TriangleMeasure* m) c
   m->agreement = agreement;
   // At a pole the corner normal is a stand-in (FoldCorners): the edge heights are not known there.
   bool pole = mesh_.pole_axis[t[0]] + mesh_.pole_axis[t[1]] + mesh_.pole_axis[t[2]] > -3;
-  if (agreement > kInvalid && !pole) {
+  // An exact measure has nothing to add (MeasureEdgeHeights leaves it as it is).
+  if (agreement > kInvalid && !pole && !m->exact) {
     // A triangle standing against the surface: every edge. Else the edges that refinement can
     // split: not a chord of an edge grid, which holds that edge's deviation (and its distance to
     // this surface, up to the edge's tolerance).
