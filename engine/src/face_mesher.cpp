@@ -120,6 +120,7 @@ class LentSurface final : public Surface {
     umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
     uknots = inner_->uknots, vknots = inner_->vknots;
     quadric = inner_->quadric;
+    planar = inner_->planar;
   }
   Vec3 Point(double u, double v) override { return inner_->Point(u, v); }
   Vec3 Normal(double u, double v) override { return inner_->Normal(u, v); }

@@ -443,6 +443,102 @@ void MeasureEdgeHeights(Surface& s, const Vec2 uv[3], const Vec3 p[3], const Vec
   m->violation = std::max(m->violation, m->deviation / c.max_deviation);
 }
 
+double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3], int edges, double suspect,
+                      Vec2* where) {
+  // The surface over the barycentric grid of step 1/kN: X at each node's (u,v) weights b, and
+  // from the grid the derivatives of X(b) at each node.
+  constexpr int kN = 4;
+  auto q_of = [&](Vec2 b) { return (1 - b.x - b.y) * uv[0] + (b.x * uv[1] + b.y * uv[2]); };
+  auto point = [&](Vec2 b) {
+    const Vec2 q = q_of(b);
+    return s.Point(q.x, q.y);
+  };
+  Vec3 x[kN + 1][kN + 1];
+  for (int i = 0; i <= kN; ++i)
+    for (int j = 0; i + j <= kN; ++j) x[i][j] = point({double(i) / kN, double(j) / kN});
+  auto column = [&](int i, int j, bool along_j) {  // dX / db_1 (or db_2) at node (i, j)
+    auto at = [&](int k) { return along_j ? x[i][k] : x[k][j]; };
+    const int c = along_j ? j : i, room = kN - i - j;
+    const int lo = c > 0 ? c - 1 : c, hi = room > 0 ? c + 1 : c;
+    return (double(kN) / (hi - lo)) * (at(hi) - at(lo));
+  };
+  // Every surface point's distance from the target is an upper bound of the nearest one's: the
+  // search keeps the least it finds. A Gauss-Newton step from b (surface point xb, derivative
+  // columns c1, c2) toward the target; false when the columns are degenerate.
+  auto step = [&](Vec3 target, Vec3 xb, Vec3 c1, Vec3 c2, double reach, Vec2* b) {
+    const double a11 = Dot(c1, c1), a12 = Dot(c1, c2), a22 = Dot(c2, c2);
+    const double det = a11 * a22 - a12 * a12;
+    if (!(det > 1e-12 * a11 * a22)) return false;
+    const Vec3 r = target - xb;
+    const double r1 = Dot(c1, r), r2 = Dot(c2, r);
+    *b = {std::clamp(b->x + (a22 * r1 - a12 * r2) / det, -reach, 1 + reach),
+          std::clamp(b->y + (a11 * r2 - a12 * r1) / det, -reach, 1 + reach)};
+    return true;
+  };
+  // The robust phase works in (u,v): its steps are bounded by the triangle's longest side in
+  // (u,v), not by the triangle's width, so a sliver in (u,v) can search across its own width.
+  double span = 0;
+  for (int i = 0; i < 3; ++i)
+    span = std::max(
+        span, std::fabs(uv[(i + 1) % 3].x - uv[i].x) + std::fabs(uv[(i + 1) % 3].y - uv[i].y));
+  double best = 0;
+  auto nearest = [&](Vec2 w, Vec3 xw, Vec3 c1, Vec3 c2) {
+    const Vec3 target = (1 - w.x - w.y) * p[0] + (w.x * p[1] + w.y * p[2]);
+    double d = Dist(target, xw);
+    Vec2 at = q_of(w), b = w;
+    Vec3 xb = xw;
+    // Two steps with the grid's derivatives, within a quarter of the triangle beyond its edges.
+    for (int k = 0; k < 2 && step(target, xb, c1, c2, 0.25, &b); ++k) {
+      xb = point(b);
+      if (Dist(target, xb) < d) d = Dist(target, xb), at = q_of(b);
+    }
+    // A point that reads over `suspect`: more steps from the best so far, in (u,v) with S's
+    // derivatives by differences there, each at most the triangle's longest (u,v) side, within
+    // the face's bounds (an uneven parametrisation can put the nearest surface point in a
+    // neighbour's patch, or across a sliver's width).
+    if (d > suspect && span > 0) {
+      const double h = span / 64;
+      Vec2 q = at;
+      Vec3 xq = s.Point(q.x, q.y);
+      for (int k = 0; k < 6; ++k) {
+        const Vec3 su = (1 / h) * (s.Point(q.x + h, q.y) - xq);
+        const Vec3 sv = (1 / h) * (s.Point(q.x, q.y + h) - xq);
+        const double a11 = Dot(su, su), a12 = Dot(su, sv), a22 = Dot(sv, sv);
+        const double det = a11 * a22 - a12 * a12;
+        if (!(det > 1e-12 * a11 * a22)) break;
+        const Vec3 r = target - xq;
+        const double r1 = Dot(su, r), r2 = Dot(sv, r);
+        Vec2 dq{(a22 * r1 - a12 * r2) / det, (a11 * r2 - a12 * r1) / det};
+        const double len = std::fabs(dq.x) + std::fabs(dq.y);
+        if (len > span) dq = (span / len) * dq;
+        const Vec2 next{std::clamp(q.x + dq.x, s.umin, s.umax),
+                        std::clamp(q.y + dq.y, s.vmin, s.vmax)};
+        if (std::fabs(next.x - q.x) + std::fabs(next.y - q.y) < 1e-6 * span) break;
+        q = next, xq = s.Point(q.x, q.y);
+        if (Dist(target, xq) < d) d = Dist(target, xq), at = q;
+      }
+    }
+    if (d > best) best = d, *where = at;
+  };
+  auto follow = [&](int i, int j) {
+    nearest({double(i) / kN, double(j) / kN}, x[i][j], column(i, j, false), column(i, j, true));
+  };
+  // The centroid (not a grid node) with the mean derivatives of the three nodes around it.
+  const Vec2 centroid{1.0 / 3, 1.0 / 3};
+  nearest(centroid, point(centroid),
+          (1.0 / 3) * (column(1, 1, false) + column(2, 1, false) + column(1, 2, false)),
+          (1.0 / 3) * (column(1, 1, true) + column(2, 1, true) + column(1, 2, true)));
+  follow(1, 1), follow(2, 1), follow(1, 2);  // (1/2, 1/4, 1/4) and its turns
+  // Edge k runs between corners k + 1 and k + 2: edge 0 is i + j = kN, edge 1 is i = 0, edge 2
+  // is j = 0.
+  for (int t = 1; t < kN; ++t) {
+    if (edges & 1) follow(t, kN - t);
+    if (edges & 2) follow(0, t);
+    if (edges & 4) follow(t, 0);
+  }
+  return best;
+}
+
 double SplitAreaRatio(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec2 q) {
   Vec3 x = s.Point(q.x, q.y);
   double a = Area(p[0], p[1], p[2]);

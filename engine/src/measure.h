@@ -67,6 +67,24 @@ void MeasureEdgeHeights(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
                         const Vec3 normals[3], const FaceCriteria& criteria, int edges,
                         TriangleMeasure* m);
 
+/// The distance from points of the triangle to the surface (to the nearest surface point, as the
+/// yardstick measures it): at the centroid, the three interior points of barycentric
+/// (1/2, 1/4, 1/4) and its turns (the points the yardstick samples inside a triangle), and at the
+/// quarter points of edge i (opposite corner i) when bit i of `edges` is set. On a thin triangle
+/// tilted over an uneven parametrisation, S at a point's (u,v) weights lands well beside that
+/// point, and the plane height there (the estimate's) says little about the mesh at the point.
+/// So S is sampled at the (u,v) of every node of the barycentric grid of step 1/4, and each point
+/// gets two Gauss-Newton steps toward its nearest surface point, with S's derivatives from the
+/// grid; a point still over `suspect` gets up to six more in (u,v), with derivatives by
+/// differences and steps as long as the triangle's longest (u,v) side, within the face's bounds
+/// (the nearest point can lie in a neighbour's patch, or across the width of a sliver in (u,v)).
+/// Every distance is from the point to a surface point, so the result never reads under the
+/// distance to the (untrimmed) surface, and over it only where the search falls short. Returns
+/// the largest distance, its (u,v) into *where. Costs 16 + 2 surface points per point (at most
+/// 42), and up to 18 more per suspect point: for a final check, not for refinement's search.
+double DenseDeviation(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], int edges,
+                      double suspect, Vec2* where);
+
 /// Sum of the 3D areas of the three triangles a split at q makes, over the triangle's area.
 double SplitAreaRatio(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], Vec2 q);
 

@@ -20,6 +20,11 @@ constexpr double kEdgeWeight = 0.12;
 // A triangle that descends from this many splits and still violates is not split again: a
 // safety net against refinement that makes no progress (sizes shrink ~3x a generation).
 constexpr int kMaxGeneration = 24;
+// The final check (Refiner::Verify): a triangle whose DenseDeviation exceeds the criterion by
+// this factor is split, in at most this many rounds of splits (each checks what the last one
+// changed; one more round checks the last splits).
+constexpr double kVerifyTolerance = 1.0;
+constexpr int kVerifyRounds = 6;
 // Below this shape quality (1 = equilateral) a triangle to refine is a sliver.
 constexpr double kSliverQuality = 0.02;
 // A reshaping flip must raise the normal agreement of the triangle it is for by this much.
@@ -41,6 +46,10 @@ Status Refiner::RefineToCriteria(int64_t max_triangles, int settle_rounds) {
     PenaliseFold(mesh_.tri[t], Agreement(t), &measure_[t]);
   }
   if (settle_rounds > 0) Settle(settle_rounds);
+  return SplitViolating(max_triangles);
+}
+
+Status Refiner::SplitViolating(int64_t max_triangles) {
   for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t)
     if (mesh_.alive[t] && measure_[t].violation > 1) Push(t);
   int64_t ops = 0;
@@ -70,6 +79,44 @@ Status Refiner::RefineToCriteria(int64_t max_triangles, int settle_rounds) {
       if (!SplitTriangle(t, mode) && reshape && reshapes > 0 && ReshapeByFlip(t)) --reshapes;
     }
     queue_ = {};
+  }
+  return Status::Ok();
+}
+
+Status Refiner::Verify(int64_t max_triangles) {
+  if (!(criteria_.max_deviation > 0) || surface_.planar) return Status::Ok();
+  std::vector<uint32_t> checked;  // per triangle: stamp_ when it was last checked (+1; 0 never)
+  for (int round = 0; round <= kVerifyRounds && !stats_.budget_hit; ++round) {
+    checked.resize(mesh_.tri.size(), 0);
+    int over = 0;
+    for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
+      if ((t & 255) == 255 && context_ && context_->ShouldStop()) return context_->StopStatus();
+      TriangleMeasure& m = measure_[t];
+      if (!mesh_.alive[t] || m.exact || checked[t] == stamp_[t] + 1u) continue;
+      checked[t] = stamp_[t] + 1u;
+      if (m.violation > 1 || (criteria_.min_length > 0 && m.max_length < 2 * criteria_.min_length))
+        continue;  // refinement left it (reported), or it is too small to split
+      Vec2 uv[3];
+      Vec3 p[3];
+      mesh_.MeasureCorners(t, uv, p);
+      const Tri& tri = mesh_.tri[t];
+      if (mesh_.pole_axis[tri[0]] + mesh_.pole_axis[tri[1]] + mesh_.pole_axis[tri[2]] > -3)
+        continue;     // a pole triangle stands for no patch of its own
+      int edges = 0;  // an edge grid's chord holds its own deviation, and cannot be split
+      for (int i = 0; i < 3; ++i) edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
+      Vec2 where;
+      const double limit = kVerifyTolerance * criteria_.max_deviation;
+      const double dense = DenseDeviation(surface_, uv, p, edges, limit, &where);
+      if (!(dense > limit)) continue;
+      m.deviation = dense, m.worst_uv = where;
+      m.violation = std::max(m.violation, dense / criteria_.max_deviation);
+      ++stats_.verify_splits;
+      ++over;
+    }
+    // The last round only checks (what it finds over stays so, and the face reports it).
+    if (over == 0 || round == kVerifyRounds) break;
+    Status st = SplitViolating(max_triangles);
+    if (!st.ok()) return st;
   }
   return Status::Ok();
 }
@@ -416,6 +463,8 @@ Status RefineFace(WorkMesh* mesh, Surface& surface, const FaceCriteria& criteria
     st = refiner.Improve();
     if (!st.ok()) return st;
   }
+  st = refiner.Verify(max_triangles);
+  if (!st.ok()) return st;
   refiner.Finish();
   return Status::Ok();
 }

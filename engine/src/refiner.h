@@ -34,7 +34,14 @@ class Refiner {
 
   // `settle_rounds`: see RefineFace.
   Status RefineToCriteria(int64_t max_triangles, int settle_rounds = 0);
+  /// Splits every triangle over the criteria, worst first (RefineToCriteria's work after the
+  /// first measures and Settle).
+  Status SplitViolating(int64_t max_triangles);
   Status Improve();
+  /// The final check of triangles measured by estimate (not a quadric's exact distance): each
+  /// is measured again densely (DenseDeviation, along the free edges and inside), and the ones
+  /// over the criterion are split as refinement splits, then their new triangles checked.
+  Status Verify(int64_t max_triangles);
   void Finish();
 
  private:

@@ -96,6 +96,7 @@ class CachedSurface final : public Surface {
     umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
     uknots = inner_->uknots, vknots = inner_->vknots;
     quadric = inner_->quadric;
+    planar = inner_->planar;
     Resize(kMinBits);
   }
   Vec3 Point(double u, double v) override {
@@ -245,6 +246,7 @@ class OcctSurface final : public Surface {
       case GeomAbs_Plane:
         frame(adaptor_.Plane().Position());
         kind_ = Kind::kPlane;
+        planar = true;
         break;
       case GeomAbs_Cylinder:
         frame(adaptor_.Cylinder().Position());

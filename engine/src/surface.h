@@ -46,6 +46,8 @@ class Surface {
                                         ///< tan(angle) per unit along the axis)
   };
   Quadric quadric;
+  /// A plane: every triangle with its corners on it lies in it (the final check passes it by).
+  bool planar = false;
 };
 
 /// A parametric curve C(t) in world coordinates.

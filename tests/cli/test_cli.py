@@ -380,7 +380,9 @@ def test_msh_parametric_round_trips_the_parameters(run, data_dir, tmp_path):
 @pytest.mark.parametrize("name,tol,bound", [("gmsh_periodic_u_cst.step", "1e-4", 1.05),
                                             ("gmsh_periodic_u_cst.step", "3e-4", 1.05),
                                             ("gmsh_angled.step", "3e-3", 1.05),
-                                            ("gmsh_solid_56.step", "1e-4", 1.05)])
+                                            ("gmsh_solid_56.step", "1e-4", 1.05),
+                                            ("gmsh_wrenchnut.stp", "3e-4", 1.0),
+                                            ("gmsh_wrenchnut.stp", "1e-4", 1.0)])
 def test_delivered_deviation_meets_the_request(run, shared_dir, tmp_path, meshbench, name, tol,
                                                bound):
     """Cases that missed the request, each met now, by the engine's estimate and by the yardstick.
@@ -396,7 +398,11 @@ def test_delivered_deviation_meets_the_request(run, shared_dir, tmp_path, meshbe
     (the estimate is no better). gmsh_solid_56 at 1e-4 (2.08x): a cone edge across
     the axis whose peak ConeDeviation lost to rounding (face 11), and edge 94's chords, which took
     the whole deviation though the edge lies 0.019 mm outside face 47's trim (the edge grid now
-    leaves room for that gap). Skipped only without the shared corpus."""
+    leaves room for that gap). gmsh_wrenchnut at 3e-4 and 1e-4 (1.022x, 1.035x): thin
+    triangles tilted over an uneven B-spline parametrisation, where the sampled estimate reads
+    short; the final check measures each estimated triangle again as the distance to the nearest
+    surface point (DenseDeviation) and splits the ones over, which gives 0.997x and 0.998x, so
+    these are held to the request itself. Skipped only without the shared corpus."""
     model = shared_dir / "corpus" / name
     if not model.exists():
         pytest.skip(f"{model} is not there (the shared corpus)")

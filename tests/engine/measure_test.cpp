@@ -11,8 +11,10 @@
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array2OfPnt.hxx>
+#include <array>
 #include <random>
 #include <string>
+#include <vector>
 
 namespace rdmesh {
 namespace {
@@ -71,7 +73,7 @@ std::unique_ptr<Surface> WavySurface() {
 }
 
 // The largest distance of the surface over the triangle from its plane, densely sampled.
-double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3]) {
+double DenseHeight(Surface& s, const Vec2 uv[3], const Vec3 p[3]) {
   Vec3 nh = Normalized(Cross(p[1] - p[0], p[2] - p[0]));
   double worst = 0;
   const int n = 60;
@@ -92,7 +94,7 @@ bool UnderReads(Surface& s, const FaceCriteria& c, double u0, double u1, double 
   if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
   Vec3 p[3];
   for (int k = 0; k < 3; ++k) p[k] = s.Point(uv[k].x, uv[k].y);
-  return MeasureTriangle(s, uv, p, c).deviation < 0.75 * DenseDeviation(s, uv, p);
+  return MeasureTriangle(s, uv, p, c).deviation < 0.75 * DenseHeight(s, uv, p);
 }
 
 TEST(MeasureTest, SeesBulgesBetweenKnotLines) {
@@ -269,6 +271,97 @@ TEST(MeasureTest, ConeDeviationIsExactOnEdgesAcrossTheAxis) {
     double dense = DenseMaxOffset(p, [&](Vec3 x) { return ConeOffset(x, o, a, angle); });
     ExpectMatchesDense(m, dense, std::to_string(i));
   }
+}
+
+// z = (x^2 + y^2) / 2 with x = u^3: a parametrisation so uneven that S at a point's (u,v) weights
+// lands well beside it on a triangle long in u.
+class UnevenParaboloid final : public Surface {
+ public:
+  UnevenParaboloid() { umin = 0, umax = 2, vmin = -1, vmax = 1; }
+  Vec3 Point(double u, double v) override {
+    const double x = u * u * u;
+    return {x, v, 0.5 * (x * x + v * v)};
+  }
+};
+
+// The distance from P to the paraboloid: Newton on the squared distance over (x, y).
+double ToParaboloid(Vec3 P) {
+  double x = P.x, y = P.y;
+  for (int k = 0; k < 30; ++k) {
+    const double g = 0.5 * (x * x + y * y) - P.z;
+    const double fx = x - P.x + g * x, fy = y - P.y + g * y;
+    const double hxx = 1 + g + x * x, hyy = 1 + g + y * y, hxy = x * y;
+    const double det = hxx * hyy - hxy * hxy;
+    x -= (hyy * fx - hxy * fy) / det, y -= (hxx * fy - hxy * fx) / det;
+  }
+  return Dist(P, {x, y, 0.5 * (x * x + y * y)});
+}
+
+TEST(MeasureTest, DenseDeviationMeasuresFromTheMeshPoints) {
+  UnevenParaboloid s;
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u0(0.4, 1.0), length(0.1, 0.2), v0(-0.5, 0.5),
+      width(0.01, 0.03), at(0, 1);
+  int off = 0;  // triangles whose plain heights at the points' (u,v) miss the truth by over 1%
+  for (int i = 0; i < 300; ++i) {
+    const double a = u0(rng), b = a + length(rng), v = v0(rng);
+    Vec2 uv[3] = {{a, v}, {b, v + width(rng)}, {a + (b - a) * at(rng), v + 0.15}};
+    if (Orient(uv[0], uv[1], uv[2]) < 0) std::swap(uv[1], uv[2]);
+    Vec3 p[3];
+    for (int k = 0; k < 3; ++k) p[k] = s.Point(uv[k].x, uv[k].y);
+    const Vec3 nh = Normalized(Cross(p[1] - p[0], p[2] - p[0]));
+    // The truth at the points DenseDeviation samples (all edges), and the plain heights of S at
+    // those points' (u,v) weights.
+    double truth = 0, naive = 0;
+    std::vector<std::array<double, 3>> points = {
+        {1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.25, 0.25}, {0.25, 0.5, 0.25}, {0.25, 0.25, 0.5}};
+    for (int e = 0; e < 3; ++e)
+      for (double t : {0.25, 0.5, 0.75}) {
+        std::array<double, 3> bw = {0, 0, 0};
+        bw[(e + 1) % 3] = 1 - t, bw[(e + 2) % 3] = t;
+        points.push_back(bw);
+      }
+    for (const auto& bw : points) {
+      const Vec3 P = bw[0] * p[0] + (bw[1] * p[1] + bw[2] * p[2]);
+      truth = std::max(truth, ToParaboloid(P));
+      const Vec2 q = bw[0] * uv[0] + (bw[1] * uv[1] + bw[2] * uv[2]);
+      naive = std::max(naive, std::fabs(Dot(nh, s.Point(q.x, q.y) - p[0])));
+    }
+    Vec2 where;
+    const double dense = DenseDeviation(s, uv, p, 7, HUGE_VAL, &where);
+    // Gauss-Newton with derivatives from a grid: within 1% of the distance, or a little over
+    // where two steps leave it short of the nearest point.
+    EXPECT_GE(dense, 0.99 * truth) << i;
+    EXPECT_LE(dense, 1.05 * truth) << i;
+    // Every point searched on (as a point over the final check's limit is): within 0.5%.
+    const double searched = DenseDeviation(s, uv, p, 7, 0, &where);
+    EXPECT_NEAR(searched, truth, 0.005 * truth) << i;
+    off += std::fabs(naive - truth) > 0.01 * truth;
+  }
+  EXPECT_GT(off, 100);  // 122: what the plain heights read
+}
+
+// The plane z = 0 with v measured from the parabola y = x^2: S(u, v) = (u, v + u^2, 0).
+class ShearedPlane final : public Surface {
+ public:
+  ShearedPlane() { umin = -1, umax = 2, vmin = -1, vmax = 2; }
+  Vec3 Point(double u, double v) override { return {u, v + u * u, 0}; }
+};
+
+TEST(MeasureTest, DenseDeviationSearchesAcrossASliverInUV) {
+  // Corners on the line v = 0 and just off it: a sliver in (u,v), but a fat triangle in the
+  // plane (0,0) (1,1) (0.5,0.2501), so every point of it lies on the surface. The nearest
+  // surface point to the middle of its long edge, (0.5, 0.5, 0), is at v = 0.25: some 2,500
+  // times the sliver's width in v away from that point's (u,v) weights.
+  ShearedPlane s;
+  const Vec2 uv[3] = {{0, 0}, {1, 0}, {0.5, 1e-4}};
+  Vec3 p[3];
+  for (int k = 0; k < 3; ++k) p[k] = s.Point(uv[k].x, uv[k].y);
+  Vec2 where;
+  // Each point's first steps stay within a quarter of the sliver: 0.25 off at the long edge.
+  EXPECT_GT(DenseDeviation(s, uv, p, 7, HUGE_VAL, &where), 0.2);
+  // A point over `suspect` is searched in (u,v), as far as the longest side: on the surface.
+  EXPECT_LT(DenseDeviation(s, uv, p, 7, 1e-9, &where), 1e-6);
 }
 
 }  // namespace
