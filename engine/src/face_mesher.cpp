@@ -145,13 +145,21 @@ double EdgeTolerance(const TopoDS_Face& face) {
 }
 
 // Why the B-rep keeps a face from `deviation`: its edges lie `gap` off its surface, their
-// tolerance is up to `tolerance`.
-std::string BrepReason(double deviation, double gap, double tolerance) {
-  char text[240];
-  std::snprintf(text, sizeof(text),
-                "the B-rep prevents the requested deviation %.3g: its edge tolerance is up to %.3g "
-                "and its edges lie up to %.3g off its surface",
-                deviation, tolerance, gap);
+// tolerance is up to `tolerance`. What the B-rep explains: a triangle measured from corners that
+// lie up to `gap` off the surface, or beside chords as coarse as the edges' tolerance, can read up
+// to the request plus the larger of the two. A face that refinement left further over (`missed`,
+// its largest deviation; 0 when it met the criteria) says so as well.
+std::string BrepReason(double deviation, double gap, double tolerance, double missed) {
+  char text[360];
+  int n = std::snprintf(text, sizeof(text),
+                        "the B-rep prevents the requested deviation %.3g: its edge tolerance is up "
+                        "to %.3g and its edges lie up to %.3g off its surface",
+                        deviation, tolerance, gap);
+  if (missed > deviation + std::max(gap, tolerance) && n > 0 && n < int(sizeof(text)))
+    std::snprintf(text + n, sizeof(text) - n,
+                  "; beyond that, some triangles could not be refined to the criteria without "
+                  "folding (up to %.3g)",
+                  missed);
   return text;
 }
 
@@ -297,7 +305,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     if (stats.budget_hit)
       f.reason = "stopped at the per-face triangle cap";
     else if (deviation > 0 && (gap > deviation || coarse))
-      f.reason = BrepReason(deviation, gap, tolerance);
+      f.reason = BrepReason(deviation, gap, tolerance, missed ? stats.max_deviation : 0);
     else if (missed)
       f.reason = "some triangles could not be refined to the criteria without folding";
   } catch (const Standard_Failure& e) {
