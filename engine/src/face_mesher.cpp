@@ -144,11 +144,15 @@ double EdgeTolerance(const TopoDS_Face& face) {
   return tolerance;
 }
 
-// Why the B-rep keeps a face from `deviation`: its edges lie `gap` off its surface, their
-// tolerance is up to `tolerance`. What the B-rep explains: a triangle measured from corners that
-// lie up to `gap` off the surface, or beside chords as coarse as the edges' tolerance, can read up
-// to the request plus the larger of the two. A face that refinement left further over (`missed`,
-// its largest deviation; 0 when it met the criteria) says so as well.
+// A face left unmeshed because the run was asked to stop (the run's status says why).
+FaceMesh Stopped(FaceMesh f, const Context& context) {
+  f = Failed(std::move(f), context.StopStatus().message());
+  f.status = FaceStatus::kSkipped;
+  return f;
+}
+
+}  // namespace
+
 std::string BrepReason(double deviation, double gap, double tolerance, double missed) {
   char text[360];
   int n = std::snprintf(text, sizeof(text),
@@ -162,15 +166,6 @@ std::string BrepReason(double deviation, double gap, double tolerance, double mi
                   missed);
   return text;
 }
-
-// A face left unmeshed because the run was asked to stop (the run's status says why).
-FaceMesh Stopped(FaceMesh f, const Context& context) {
-  f = Failed(std::move(f), context.StopStatus().message());
-  f.status = FaceStatus::kSkipped;
-  return f;
-}
-
-}  // namespace
 
 FaceSurfaces::FaceSurfaces(int face_count) : exact_(face_count), nurbs_(face_count) {}
 FaceSurfaces::~FaceSurfaces() = default;

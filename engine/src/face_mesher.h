@@ -3,6 +3,7 @@
 // the FaceMesh it hands to assembly. Faces are independent once the edge grids exist.
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "grids.h"
@@ -40,6 +41,14 @@ struct FaceJob {
   /// Evaluators shared with other runs on the model (levels of detail); null = made per face.
   FaceSurfaces* surfaces = nullptr;
 };
+
+/// A face's reason when the B-rep keeps it from the requested `deviation`: its edges lie up to
+/// `gap` off its surface, and their tolerance is up to `tolerance`. What the B-rep explains: a
+/// triangle measured from corners up to `gap` off the surface, or beside chords as coarse as the
+/// edges' tolerance, can read up to the request plus the larger of the two. Where refinement left
+/// the face further over (`missed`, its largest deviation; 0 when it met the criteria), the
+/// reason says so as well.
+std::string BrepReason(double deviation, double gap, double tolerance, double missed);
 
 /// Meshes face `face_id` of the model. Never throws: OCCT failures and bad loops come back as a
 /// kFailed FaceMesh with the reason. Boundary nodes keep their B-rep classification in `refs`
