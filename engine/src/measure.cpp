@@ -462,17 +462,15 @@ double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3], int edges, 
     const int lo = c > 0 ? c - 1 : c, hi = room > 0 ? c + 1 : c;
     return (double(kN) / (hi - lo)) * (at(hi) - at(lo));
   };
-  // Every surface point's distance from the target is an upper bound of the nearest one's: the
-  // search keeps the least it finds. A Gauss-Newton step from b (surface point xb, derivative
-  // columns c1, c2) toward the target; false when the columns are degenerate.
-  auto step = [&](Vec3 target, Vec3 xb, Vec3 c1, Vec3 c2, double reach, Vec2* b) {
+  // The Gauss-Newton step toward `target` from a surface point x with derivative columns c1, c2
+  // (along two parameters): into *d; false when the columns are degenerate.
+  auto solve = [](Vec3 target, Vec3 x, Vec3 c1, Vec3 c2, Vec2* d) {
     const double a11 = Dot(c1, c1), a12 = Dot(c1, c2), a22 = Dot(c2, c2);
     const double det = a11 * a22 - a12 * a12;
     if (!(det > 1e-12 * a11 * a22)) return false;
-    const Vec3 r = target - xb;
+    const Vec3 r = target - x;
     const double r1 = Dot(c1, r), r2 = Dot(c2, r);
-    *b = {std::clamp(b->x + (a22 * r1 - a12 * r2) / det, -reach, 1 + reach),
-          std::clamp(b->y + (a11 * r2 - a12 * r1) / det, -reach, 1 + reach)};
+    *d = {(a22 * r1 - a12 * r2) / det, (a11 * r2 - a12 * r1) / det};
     return true;
   };
   // The robust phase works in (u,v): its steps are bounded by the triangle's longest side in
@@ -481,16 +479,19 @@ double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3], int edges, 
   for (int i = 0; i < 3; ++i)
     span = std::max(
         span, std::fabs(uv[(i + 1) % 3].x - uv[i].x) + std::fabs(uv[(i + 1) % 3].y - uv[i].y));
+  // Every surface point's distance from the target is an upper bound of the nearest one's: the
+  // search keeps the least it finds, at (u,v) `at`, S(at) = `x_at`.
   double best = 0;
   auto nearest = [&](Vec2 w, Vec3 xw, Vec3 c1, Vec3 c2) {
     const Vec3 target = (1 - w.x - w.y) * p[0] + (w.x * p[1] + w.y * p[2]);
     double d = Dist(target, xw);
-    Vec2 at = q_of(w), b = w;
-    Vec3 xb = xw;
+    Vec2 at = q_of(w), b = w, db;
+    Vec3 x_at = xw, xb = xw;
     // Two steps with the grid's derivatives, within a quarter of the triangle beyond its edges.
-    for (int k = 0; k < 2 && step(target, xb, c1, c2, 0.25, &b); ++k) {
+    for (int k = 0; k < 2 && solve(target, xb, c1, c2, &db); ++k) {
+      b = {std::clamp(b.x + db.x, -0.25, 1.25), std::clamp(b.y + db.y, -0.25, 1.25)};
       xb = point(b);
-      if (Dist(target, xb) < d) d = Dist(target, xb), at = q_of(b);
+      if (Dist(target, xb) < d) d = Dist(target, xb), at = q_of(b), x_at = xb;
     }
     // A point that reads over `suspect`: more steps from the best so far, in (u,v) with S's
     // derivatives by differences there, each at most the triangle's longest (u,v) side, within
@@ -498,17 +499,12 @@ double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3], int edges, 
     // neighbour's patch, or across a sliver's width).
     if (d > suspect && span > 0) {
       const double h = span / 64;
-      Vec2 q = at;
-      Vec3 xq = s.Point(q.x, q.y);
+      Vec2 q = at, dq;
+      Vec3 xq = x_at;
       for (int k = 0; k < 6; ++k) {
         const Vec3 su = (1 / h) * (s.Point(q.x + h, q.y) - xq);
         const Vec3 sv = (1 / h) * (s.Point(q.x, q.y + h) - xq);
-        const double a11 = Dot(su, su), a12 = Dot(su, sv), a22 = Dot(sv, sv);
-        const double det = a11 * a22 - a12 * a12;
-        if (!(det > 1e-12 * a11 * a22)) break;
-        const Vec3 r = target - xq;
-        const double r1 = Dot(su, r), r2 = Dot(sv, r);
-        Vec2 dq{(a22 * r1 - a12 * r2) / det, (a11 * r2 - a12 * r1) / det};
+        if (!solve(target, xq, su, sv, &dq)) break;
         const double len = std::fabs(dq.x) + std::fabs(dq.y);
         if (len > span) dq = (span / len) * dq;
         const Vec2 next{std::clamp(q.x + dq.x, s.umin, s.umax),
