@@ -13,19 +13,30 @@ SegmentMeasure MeasureSegment(Curve& curve, double a, double b,
   SegmentMeasure m;
   Vec3 pa = curve.Point(a), pb = curve.Point(b);
   m.chord = Dist(pa, pb);
-  // The split that maximises the sum of the sub-chords is, on a small segment, the point
-  // farthest from the chord; search the chord sum (the paper's objective) and measure both.
-  double sum = 0;
-  m.split = MaximizeOnInterval(
-      [&](double t) {
-        Vec3 p = curve.Point(t);
-        return Dist(pa, p) + Dist(p, pb);
-      },
-      a, b, 5, 14, &sum);
-  double far_value = 0;
-  double far =
-      MaximizeOnInterval([&](double t) { return PointSegmentDistance(curve.Point(t), pa, pb); }, a,
-                         b, 5, 12, &far_value);
+  double sum = 0, far = 0.5 * (a + b), far_value = 0;
+  if (curve.shape == Curve::Shape::kLine) {
+    // Straight: the curve is its chord. Split in the middle.
+    m.split = far;
+    sum = m.chord;
+  } else if (curve.shape == Curve::Shape::kCircle) {
+    // An arc, by angle: symmetric about its middle, which is both the farthest point from the
+    // chord and the split that maximises the sum of the sub-chords.
+    Vec3 pm = curve.Point(far);
+    m.split = far;
+    sum = Dist(pa, pm) + Dist(pm, pb);
+    far_value = PointSegmentDistance(pm, pa, pb);
+  } else {
+    // The split that maximises the sum of the sub-chords is, on a small segment, the point
+    // farthest from the chord; search the chord sum (the paper's objective) and measure both.
+    m.split = MaximizeOnInterval(
+        [&](double t) {
+          Vec3 p = curve.Point(t);
+          return Dist(pa, p) + Dist(p, pb);
+        },
+        a, b, 5, 14, &sum);
+    far = MaximizeOnInterval([&](double t) { return PointSegmentDistance(curve.Point(t), pa, pb); },
+                             a, b, 5, 12, &far_value);
+  }
   m.sagitta = far_value;
   if (sides && !sides->empty() && far_value > 0) {
     // The sagitta vector, from the chord to the farthest point, split along each face's normal.

@@ -137,7 +137,7 @@ class CachedSurface final : public Surface {
 
 class CircleCurve final : public Curve {
  public:
-  CircleCurve(double r, double z0) : r_(r), z0_(z0) {}
+  CircleCurve(double r, double z0) : r_(r), z0_(z0) { shape = Shape::kCircle; }
   Vec3 Point(double t) override { return {r_ * std::cos(t), r_ * std::sin(t), z0_}; }
 
  private:
@@ -438,7 +438,18 @@ class OcctSurface final : public Surface {
 
 class OcctCurve final : public Curve {
  public:
-  explicit OcctCurve(const TopoDS_Edge& edge) : adaptor_(edge) {}
+  explicit OcctCurve(const TopoDS_Edge& edge) : adaptor_(edge) {
+    switch (adaptor_.GetType()) {
+      case GeomAbs_Line:
+        shape = Shape::kLine;
+        break;
+      case GeomAbs_Circle:
+        shape = Shape::kCircle;
+        break;
+      default:
+        break;
+    }
+  }
   Vec3 Point(double t) override { return ToVec(adaptor_.Value(t)); }
 
  private:

@@ -55,6 +55,11 @@ class Curve {
  public:
   virtual ~Curve() = default;
   virtual Vec3 Point(double t) = 0;
+  /// What closed forms apply (MeasureSegment): a line (no sagitta, no deficit) or a circle
+  /// parametrised by its angle (the farthest point from a chord, and the best split, are at the
+  /// middle parameter).
+  enum class Shape { kOther, kLine, kCircle };
+  Shape shape = Shape::kOther;
 };
 
 /// Analytic surfaces for tests. Plane z = 0 over [0,w]x[0,h]; cylinder of radius r along z,
