@@ -30,42 +30,60 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// The outward unit normal of `face` where the edge's pcurve passes at parameter t, or nothing
-// where the surface is singular or the face has no pcurve for the edge.
-std::optional<gp_Dir> FaceNormalOnEdge(const TopoDS_Face& face, const TopoDS_Edge& edge, double t) {
-  try {
-    double first, last;
-    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last);
-    if (pcurve.IsNull()) return std::nullopt;
-    gp_Pnt2d uv = pcurve->Value(t);
-    // The bare surface: an adaptor would first compute the face's (u,v) bounds.
-    TopLoc_Location location;
-    Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
-    if (surface.IsNull()) return std::nullopt;
-    gp_Pnt point;
-    gp_Vec du, dv;
-    surface->D1(uv.X(), uv.Y(), point, du, dv);
-    gp_Vec normal = du.Crossed(dv);
-    if (normal.Magnitude() <= 1e-12 * std::max(1.0, du.Magnitude() * dv.Magnitude()))
-      return std::nullopt;
-    normal.Transform(location.Transformation());
-    if (face.Orientation() == TopAbs_REVERSED) normal.Reverse();
-    return gp_Dir(normal);
-  } catch (const Standard_Failure&) {
-    return std::nullopt;
+// The outward unit normal of one face beside an edge, along the edge's pcurve on it. The pcurve
+// and surface are looked up once: on a plane without a stored pcurve, OCCT projects the edge's
+// curve at every lookup.
+class FaceNormalOnEdge {
+ public:
+  FaceNormalOnEdge(const TopoDS_Face& face, const TopoDS_Edge& edge) {
+    try {
+      double first, last;
+      pcurve_ = BRep_Tool::CurveOnSurface(edge, face, first, last);
+      // The bare surface: an adaptor would first compute the face's (u,v) bounds.
+      surface_ = BRep_Tool::Surface(face, location_);
+      reversed_ = face.Orientation() == TopAbs_REVERSED;
+    } catch (const Standard_Failure&) {
+      pcurve_.Nullify();
+    }
   }
-}
+  // At parameter t; nothing where the surface is singular or the face has no pcurve for the edge.
+  std::optional<gp_Dir> At(double t) const {
+    if (pcurve_.IsNull() || surface_.IsNull()) return std::nullopt;
+    try {
+      gp_Pnt2d uv = pcurve_->Value(t);
+      gp_Pnt point;
+      gp_Vec du, dv;
+      surface_->D1(uv.X(), uv.Y(), point, du, dv);
+      gp_Vec normal = du.Crossed(dv);
+      if (normal.Magnitude() <= 1e-12 * std::max(1.0, du.Magnitude() * dv.Magnitude()))
+        return std::nullopt;
+      normal.Transform(location_.Transformation());
+      if (reversed_) normal.Reverse();
+      return gp_Dir(normal);
+    } catch (const Standard_Failure&) {
+      return std::nullopt;
+    }
+  }
+
+ private:
+  Handle(Geom2d_Curve) pcurve_;
+  Handle(Geom_Surface) surface_;
+  TopLoc_Location location_;
+  bool reversed_ = false;
+};
 
 // Largest angle (degrees) between the faces' exact normals over the curve parameters `ts` (the
 // edge's nodes); -1 when a normal is undefined at every parameter.
 double Dihedral(const Model& model, const TopoDS_Edge& edge, const std::vector<int32_t>& faces,
                 const std::vector<double>& ts) {
   double largest = -1.0;
+  std::vector<FaceNormalOnEdge> sides;
+  for (int32_t f : faces) sides.emplace_back(model.face(f), edge);
   std::vector<gp_Dir> normals;
   for (double t : ts) {
     normals.clear();
-    for (int32_t f : faces) {
-      std::optional<gp_Dir> normal = FaceNormalOnEdge(model.face(f), edge, t);
+    for (const FaceNormalOnEdge& side : sides) {
+      std::optional<gp_Dir> normal = side.At(t);
       if (!normal) break;
       normals.push_back(*normal);
     }
