@@ -140,9 +140,11 @@ class Refiner {
   bool BestCollapse(int v, CollapseChoice* best, double slack = 1.0);
   bool CollapseAndSmooth(int v, CollapseChoice& choice);
   bool SmoothNode(int v);
-  int CollapsePass();
+  // Marks in *near (one per node) the nodes within two rings of each collapse's survivor.
+  int CollapsePass(std::vector<uint8_t>* near);
   int FlipPass();
-  int SmoothPass();
+  // Over every node, or only those `only` marks.
+  int SmoothPass(const std::vector<uint8_t>* only);
   // Flip passes until none flips (at most a few), then `rounds` of a flip pass and a smoothing
   // pass: on a first triangulation, before refinement queues anything.
   void Settle(int rounds);
