@@ -43,8 +43,9 @@ struct SegmentMeasure {
   double across = 0;   ///< largest tangential sagitta / EdgeSide::max_overshoot over the sides
 };
 
-/// Measures [a, b] with a derivative-free search for the farthest / best split point; `sides`
-/// (may be null or empty) also gives SegmentMeasure::across, at the farthest point.
+/// Measures [a, b] with a derivative-free search for the farthest / best split point (in closed
+/// form on a line or a circle: Curve::shape); `sides` (may be null or empty) also gives
+/// SegmentMeasure::across, at the farthest point.
 SegmentMeasure MeasureSegment(Curve& curve, double a, double b,
                               const std::vector<EdgeSide>* sides = nullptr);
 
