@@ -179,13 +179,8 @@ std::unique_ptr<Surface> FaceSurfaces::Lend(const Model& model, int face_id, boo
 // How many times a face left over its criteria is refined again from its own result.
 constexpr int kStuckRetries = 2;
 
-// A sphere's lattice (SphereLatticeSeeds) stands at this fraction of the deviation, and is
-// settled by this many rounds of flips and smoothing before refinement. While tuning (boundary
-// clearance 0.5), unit sphere triangles over the interpolating minimum at 3e-3 / 1e-3 / 3e-4 /
-// 1e-4 of the diagonal: fill 0.85 1.20 / 1.17 / 1.19 / 1.18, 0.875 1.19 / 1.19 / 1.17 / 1.17,
-// 0.9 1.26 / 1.20 / 1.20 / 1.16; 0.85 was the fastest of the three (bench/RESULTS.md, "Spheres
-// start from a lattice").
-constexpr double kLatticeFill = 0.85;
+// A sphere's lattice (SphereLatticeSeeds) is settled by this many rounds of flips and smoothing
+// before refinement (bench/RESULTS.md, "Spheres start from a lattice").
 constexpr int kLatticeSettleRounds = 4;
 
 FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
@@ -212,7 +207,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     std::vector<Vec2> seeds;
     if (f.surface_type == SurfaceType::kSphere && !job.nurbs && job.criteria.rd_tolerance == 0 &&
         job.criteria.max_length == 0) {
-      seeds = SphereLatticeSeeds(domain, *surface, job.criteria.max_deviation, kLatticeFill,
+      seeds = SphereLatticeSeeds(domain, *surface, job.criteria.max_deviation,
                                  static_cast<size_t>(job.max_triangles / 2));
     }
     const int settle_rounds = seeds.empty() ? 0 : kLatticeSettleRounds;
