@@ -20,10 +20,14 @@ constexpr double kEdgeWeight = 0.12;
 // A triangle that descends from this many splits and still violates is not split again: a
 // safety net against refinement that makes no progress (sizes shrink ~3x a generation). A split
 // gives its new triangles the largest generation in its cavity, so a large triangle beside a
-// finely refined region inherits that region's depth: at 24, gmsh_periodic_u_cst at 3e-5 keeps a
-// 17 mm triangle 0.12 mm off (38x the request). 48 fixed that but let gmsh_solid_56 at 1e-2
-// refine where it cannot progress (894 -> 1,100 triangles, 37 -> 140 inverted; bench/RESULTS.md).
+// finely refined region inherits that region's depth: at 24 alone, gmsh_periodic_u_cst at 3e-5
+// kept a 17 mm triangle 0.12 mm off (38x the request). 48 fixed that but let gmsh_solid_56 at
+// 1e-2 refine where it cannot progress (894 -> 1,100 triangles, 37 -> 140 inverted). So the cap
+// spares a triangle whose longest edge is still over kLargeAtCap of the diagonal of the face's
+// box: refinement that makes no progress has made its triangles small long before
+// (bench/RESULTS.md, "The generation cap spares large triangles").
 constexpr int kMaxGeneration = 24;
+constexpr double kLargeAtCap = 0.1;
 // The final check (Refiner::Verify) splits in at most this many rounds (each checks what the
 // last one changed; one more round checks the last splits).
 constexpr int kVerifyRounds = 6;
@@ -38,6 +42,12 @@ Status Refiner::RefineToCriteria(int64_t max_triangles, int settle_rounds) {
   measure_.resize(mesh_.tri.size());
   stamp_.assign(mesh_.tri.size(), 0);
   generation_.assign(mesh_.tri.size(), 0);
+  Vec3 lo = mesh_.xyz.empty() ? Vec3{0, 0, 0} : mesh_.xyz[0], hi = lo;
+  for (const Vec3& x : mesh_.xyz) {
+    lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
+    hi = {std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
+  }
+  face_diagonal_ = Dist(lo, hi);
   for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
     if ((t & 255) == 255 && context_ && context_->ShouldStop()) return context_->StopStatus();
     if (!mesh_.alive[t]) continue;
@@ -77,7 +87,9 @@ Status Refiner::SplitViolating(int64_t max_triangles) {
       }
       if ((++ops & 255) == 0 && context_ && context_->ShouldStop()) return context_->StopStatus();
       // No progress here: leave it; Finish() reports it through max_violation.
-      if (generation_[t] >= kMaxGeneration) continue;
+      if (generation_[t] >= kMaxGeneration &&
+          !(measure_[t].max_length > kLargeAtCap * face_diagonal_))
+        continue;
       if (!SplitTriangle(t, mode) && reshape && reshapes > 0 && ReshapeByFlip(t)) --reshapes;
     }
     queue_ = {};

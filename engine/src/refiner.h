@@ -158,6 +158,7 @@ class Refiner {
   std::vector<TriangleMeasure> measure_;
   std::vector<uint32_t> stamp_;
   std::vector<uint8_t> generation_;  // per triangle: how many splits it descends from
+  double face_diagonal_ = 0;         // of the box of the nodes RefineToCriteria starts from
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
   std::vector<int> fan_ring_, fan_nodes_, link_ring_, link_nodes_;  // BestCollapse's scratch
   std::vector<Tri> collapse_tris_;
