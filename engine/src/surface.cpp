@@ -381,10 +381,7 @@ class OcctSurface final : public Surface {
     return e;
   }
 
-  // 32 rather than 8: a B-spline face with many knot spans (gmsh_wrenchnut) rebuilt span
-  // caches all the time; at 1e-3 its meshing CPU drops by 12% (identical meshes), and faces with
-  // few spans do not notice (bench/RESULTS.md, "Span caches and the generation cap").
-  static constexpr int kSpans = 32;
+  static constexpr int kSpans = 8;
   struct Span {
     double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // its knot span: [u0, u1) x [v0, v1)
     uint64_t last_use = 0;
