@@ -168,8 +168,9 @@ std::vector<Vec3> GeodesicLattice(int m, int n) {
   return points;
 }
 
-// GeodesicLattice, computed once per class in the process (the octant faces of a rounded box
-// share one): a few recent classes are kept.
+// GeodesicLattice, computed once per class in the process (closed spheres of one radius meshed at
+// one deviation, in one model or over a daemon's requests, share it): a few recent classes are
+// kept.
 std::shared_ptr<const std::vector<Vec3>> CachedLattice(int m, int n) {
   static std::mutex mutex;
   static std::vector<std::pair<std::pair<int, int>, std::shared_ptr<const std::vector<Vec3>>>>
@@ -186,19 +187,26 @@ std::shared_ptr<const std::vector<Vec3>> CachedLattice(int m, int n) {
   return made;
 }
 
-// The sphere's part of the work common to both lattices: its radius, and the edge of the
-// equilateral triangle of circumradius r that stands `fill` x the deviation off it
-// (r^2 = 2 R d - d^2, edge r sqrt(3)); 0 when no lattice serves.
-double LatticeEdge(const FaceDomain& d, Surface& s, double max_deviation, double fill,
-                   double* radius) {
-  *radius = MeridianRadius(s, 0.5 * (d.umin + d.umax));
+// The sphere's part of the work common to both lattices: its radius, and the equilateral
+// triangle of circumradius r that stands `fill` x the deviation off it (r^2 = 2 R d - d^2): its
+// edge r sqrt(3), and the angle that edge turns on the sphere. edge 0 when no lattice serves.
+struct LatticeScale {
+  double radius = 0, edge = 0, step = 0;
+};
+
+LatticeScale ScaleOf(const FaceDomain& d, Surface& s, double max_deviation, double fill) {
+  LatticeScale l;
+  l.radius = MeridianRadius(s, 0.5 * (d.umin + d.umax));
   const double deviation = fill * max_deviation;
-  if (!(max_deviation > 0) || d.segments.empty() || !(*radius > 0) || !(deviation < 0.5 * *radius))
-    return 0;
-  const double edge = std::sqrt(3.0) * std::sqrt(2 * *radius * deviation - deviation * deviation);
+  if (!(max_deviation > 0) || d.segments.empty() || !(l.radius > 0) ||
+      !(deviation < 0.5 * l.radius))
+    return {};
+  const double edge = std::sqrt(3.0) * std::sqrt(2 * l.radius * deviation - deviation * deviation);
   // A lattice edge that turns more than pi/8 is a coarse request: the grid of SeedPoints serves.
-  const double step = 2 * std::asin(std::min(1.0, 0.5 * edge / *radius));
-  return step > 0 && step <= M_PI / 8 ? edge : 0;
+  l.step = 2 * std::asin(std::min(1.0, 0.5 * edge / l.radius));
+  if (!(l.step > 0 && l.step <= M_PI / 8)) return {};
+  l.edge = edge;
+  return l;
 }
 
 // Keeps `p` as a seed when it lies inside the domain and clear of its boundary by `clearance`
@@ -227,10 +235,9 @@ constexpr double kClearance = 0.4;
 std::vector<Vec2> RingSeeds(const FaceDomain& d, Surface& s, double max_deviation,
                             size_t max_seeds) {
   std::vector<Vec2> seeds;
-  double radius = 0;
-  const double edge = LatticeEdge(d, s, max_deviation, kRingFill, &radius);
-  if (!(edge > 0)) return seeds;
-  const double step = 2 * std::asin(std::min(1.0, 0.5 * edge / radius));
+  const LatticeScale l = ScaleOf(d, s, max_deviation, kRingFill);
+  if (!(l.edge > 0)) return seeds;
+  const double edge = l.edge, step = l.step;
   const int rows = std::max(2, static_cast<int>(std::lround(M_PI / (step * std::sqrt(3.0) / 2))));
   const double row = M_PI / rows;
   // Expected count against the cap before any point is made (the sphere's part in the box).
@@ -258,9 +265,9 @@ std::vector<Vec2> RingSeeds(const FaceDomain& d, Surface& s, double max_deviatio
 std::vector<Vec2> GeodesicSeeds(const FaceDomain& d, Surface& s, double max_deviation,
                                 size_t max_seeds) {
   std::vector<Vec2> seeds;
-  double radius = 0;
-  const double edge = LatticeEdge(d, s, max_deviation, kGeodesicFill, &radius);
-  if (!(edge > 0)) return seeds;
+  const LatticeScale l = ScaleOf(d, s, max_deviation, kGeodesicFill);
+  if (!(l.edge > 0)) return seeds;
+  const double edge = l.edge, radius = l.radius;
   // Each point holds two triangles of area sqrt(3)/4 edge^2 of the sphere's 4 pi R^2.
   const double area = std::sqrt(3.0) / 4 * edge * edge;
   const double wanted_t = (4 * M_PI * radius * radius / (2 * area) - 2) / 10;
