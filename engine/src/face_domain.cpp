@@ -1,15 +1,9 @@
 #include "face_domain.h"
 
-#include <BRepTools_WireExplorer.hxx>
 #include <BRep_Tool.hxx>
-#include <Geom2d_Curve.hxx>
-#include <Geom_Surface.hxx>
 #include <Standard_Failure.hxx>
-#include <TopExp.hxx>
-#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
-#include <TopoDS_Wire.hxx>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -96,43 +90,29 @@ double VertexTolerance(const Model& model, int vertex_id) {
 
 std::string EdgeName(int eid) { return "edge " + std::to_string(eid); }
 
-// Walks one wire. Fails for an edge without grid or pcurve.
-Status WalkWire(const Model& model, const TopoDS_Face& face, const TopoDS_Wire& wire,
-                const std::vector<EdgeGrid>& grids, std::vector<EdgeWalk>* walks) {
+// Walks one wire of the face: its edges' grid points in (u,v). Fails for an edge without id,
+// grid or pcurve, and for a wire whose edges do not connect.
+Status WalkWire(const FaceWire& wire, const std::vector<EdgeGrid>& grids,
+                std::vector<EdgeWalk>* walks) {
   walks->clear();
-  for (BRepTools_WireExplorer ex(wire, face); ex.More(); ex.Next()) {
-    TopoDS_Edge e = ex.Current();
-    if (e.Orientation() == TopAbs_INTERNAL || e.Orientation() == TopAbs_EXTERNAL) continue;
+  for (const WireEdge& e : wire.edges) {
     EdgeWalk w;
-    w.eid = model.edges.FindIndex(e);
+    w.eid = e.eid;
     if (w.eid == 0)
       return Status(StatusCode::kInternal, "a face edge is missing from the edge map");
     const EdgeGrid& g = grids[w.eid - 1];
     if (g.t.size() < 2) return Status(StatusCode::kInternal, EdgeName(w.eid) + " has no grid");
-    double f, l;
-    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, f, l);
-    if (pcurve.IsNull())
+    if (e.pcurve.IsNull())
       return Status(StatusCode::kInternal, EdgeName(w.eid) + " has no pcurve on the face");
-    w.reversed = e.Orientation() == TopAbs_REVERSED;
+    w.reversed = e.reversed;
     const int n = static_cast<int>(g.t.size());
     for (int k = 0; k < n; ++k) {
-      gp_Pnt2d p = pcurve->Value(g.t[w.reversed ? n - 1 - k : k]);
+      gp_Pnt2d p = e.pcurve->Value(g.t[w.reversed ? n - 1 - k : k]);
       w.uv.push_back({p.X(), p.Y()});
     }
     walks->push_back(std::move(w));
   }
-  // The explorer follows the edges from vertex to vertex and silently drops those it cannot
-  // reach; a loop without them would leave a hole in the mesh.
-  int edges = 0;
-  for (TopExp_Explorer ex(wire, TopAbs_EDGE); ex.More(); ex.Next())
-    edges += ex.Current().Orientation() == TopAbs_FORWARD ||
-             ex.Current().Orientation() == TopAbs_REVERSED;
-  if (static_cast<int>(walks->size()) < edges)
-    return Status(StatusCode::kInternal,
-                  "a wire's edges do not connect end to end: the wire explorer reaches " +
-                      std::to_string(walks->size()) + " of its " + std::to_string(edges) +
-                      " edges");
-  return Status::Ok();
+  return wire.reached;
 }
 
 // Where one pcurve ends and the next begins: moves the next walk by whole periods when that
@@ -172,17 +152,16 @@ Status JoinWalks(const Model& model, const EdgeGrid& from_grid, const EdgeWalk& 
 
 }  // namespace
 
-Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
-                       Surface& surface, FaceDomain* d) {
+Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_id,
+                       const std::vector<EdgeGrid>& grids, Surface& surface, FaceDomain* d) {
   *d = FaceDomain();
-  TopoDS_Face face = TopoDS::Face(model.face(face_id).Oriented(TopAbs_FORWARD));
-  Handle(Geom_Surface) geom = BRep_Tool::Surface(face);
-  const double period_u = !geom.IsNull() && geom->IsUPeriodic() ? geom->UPeriod() : 0.0;
-  const double period_v = !geom.IsNull() && geom->IsVPeriodic() ? geom->VPeriod() : 0.0;
+  FaceLoops scratch;
+  const FaceLoops& loops = pcurves.Loops(model, face_id, &scratch);
+  const double period_u = loops.period_u, period_v = loops.period_v;
   std::map<int, std::vector<int>> vertex_nodes;  // vertex id -> its nodes so far
   std::vector<EdgeWalk> walks;
-  for (TopExp_Explorer wexp(face, TopAbs_WIRE); wexp.More(); wexp.Next()) {
-    Status st = WalkWire(model, face, TopoDS::Wire(wexp.Current()), grids, &walks);
+  for (const FaceWire& wire : loops.wires) {
+    Status st = WalkWire(wire, grids, &walks);
     if (!st.ok()) return st;
     if (walks.empty()) continue;
     const int m = static_cast<int>(walks.size());

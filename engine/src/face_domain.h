@@ -11,6 +11,7 @@
 #include "geom.h"
 #include "grids.h"
 #include "node_ref.h"
+#include "pcurves.h"
 #include "rdmesh/context.h"
 #include "rdmesh/status.h"
 #include "surface.h"
@@ -43,8 +44,8 @@ struct FaceDomain {
 /// it on the surface (a loose pcurve, within a large edge tolerance) takes the nearby (u,v) where
 /// the surface passes through it. Fails with a reason that names the edges for
 /// bad pcurves and loops that do not close.
-Status BuildFaceDomain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
-                       Surface& surface, FaceDomain* domain);
+Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_id,
+                       const std::vector<EdgeGrid>& grids, Surface& surface, FaceDomain* domain);
 
 /// How far the domain's nodes (points of the edges' 3D curves, shared with the neighbouring
 /// faces) lie off the surface at their (u,v): the largest |(xyz - S(uv)) . N(uv)|. The B-rep lets

@@ -130,10 +130,10 @@ class LentSurface final : public Surface {
 };
 
 // The evaluator of a face: lent by `surfaces` when there are some, else made for this use.
-std::unique_ptr<Surface> FaceSurface(const Model& model, int face_id, bool nurbs,
-                                     FaceSurfaces* surfaces) {
-  if (surfaces) return surfaces->Lend(model, face_id, nurbs);
-  return MakeFaceSurface(model.face(face_id), nurbs);
+std::unique_ptr<Surface> FaceSurface(const Model& model, const FacePcurves& pcurves, int face_id,
+                                     bool nurbs, FaceSurfaces* surfaces) {
+  if (surfaces) return surfaces->Lend(model, pcurves, face_id, nurbs);
+  return MakeFaceSurface(model.face(face_id), nurbs, pcurves.Bounds(model, face_id));
 }
 
 // The largest tolerance of the face's edges.
@@ -170,9 +170,10 @@ std::string BrepReason(double deviation, double gap, double tolerance, double mi
 FaceSurfaces::FaceSurfaces(int face_count) : exact_(face_count), nurbs_(face_count) {}
 FaceSurfaces::~FaceSurfaces() = default;
 
-std::unique_ptr<Surface> FaceSurfaces::Lend(const Model& model, int face_id, bool nurbs) {
+std::unique_ptr<Surface> FaceSurfaces::Lend(const Model& model, const FacePcurves& pcurves,
+                                            int face_id, bool nurbs) {
   std::unique_ptr<Surface>& slot = (nurbs ? nurbs_ : exact_)[face_id - 1];
-  if (!slot) slot = MakeFaceSurface(model.face(face_id), nurbs);
+  if (!slot) slot = MakeFaceSurface(model.face(face_id), nurbs, pcurves.Bounds(model, face_id));
   return std::make_unique<LentSurface>(slot.get());
 }
 
@@ -183,8 +184,9 @@ constexpr int kStuckRetries = 2;
 // before refinement (bench/RESULTS.md, "Spheres start from a lattice").
 constexpr int kLatticeSettleRounds = 4;
 
-FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
-                  const FaceJob& job, Context* context, std::vector<NodeRef>* refs) {
+FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
+                  const std::vector<EdgeGrid>& grids, const FaceJob& job, Context* context,
+                  std::vector<NodeRef>* refs) {
   auto t0 = std::chrono::steady_clock::now();
   FaceMesh f;
   f.face_id = face_id;
@@ -194,9 +196,9 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
     const TopoDS_Face& face = model.face(face_id);
     f.surface_type = FaceSurfaceType(face);
     std::unique_ptr<Surface> surface =
-        WithPointCache(FaceSurface(model, face_id, job.nurbs, job.surfaces));
+        WithPointCache(FaceSurface(model, pcurves, face_id, job.nurbs, job.surfaces));
     FaceDomain domain;
-    Status st = BuildFaceDomain(model, face_id, grids, *surface, &domain);
+    Status st = BuildFaceDomain(model, pcurves, face_id, grids, *surface, &domain);
     if (!st.ok()) return Failed(f, st.message());
     if (context && context->ShouldStop()) return Stopped(f, *context);
     std::vector<DomainConflict> conflicts = FindConflicts(domain, context);
@@ -310,7 +312,7 @@ FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& 
   return f;
 }
 
-FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
+FaceMesh PlaceCopy(const Model& model, const FacePcurves& pcurves, int face_id, const FaceMesh& rep,
                    const std::vector<NodeRef>& rep_refs, const std::vector<EdgeGrid>& grids,
                    std::vector<NodeRef>* refs) {
   FaceMesh f = rep;
@@ -322,11 +324,13 @@ FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& rep,
   try {
     // Boundary nodes: the copy's own domain lists them in the same order as the
     // representative's (same TShape), with its own exact points and ids.
-    std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), false);
+    std::unique_ptr<Surface> surface =
+        MakeFaceSurface(model.face(face_id), false, pcurves.Bounds(model, face_id));
     FaceDomain mine, theirs;
-    Status st = BuildFaceDomain(model, face_id, grids, *surface, &mine);
-    std::unique_ptr<Surface> rep_surface = MakeFaceSurface(model.face(rep_id), false);
-    if (st.ok()) st = BuildFaceDomain(model, rep_id, grids, *rep_surface, &theirs);
+    Status st = BuildFaceDomain(model, pcurves, face_id, grids, *surface, &mine);
+    std::unique_ptr<Surface> rep_surface =
+        MakeFaceSurface(model.face(rep_id), false, pcurves.Bounds(model, rep_id));
+    if (st.ok()) st = BuildFaceDomain(model, pcurves, rep_id, grids, *rep_surface, &theirs);
     if (!st.ok() || mine.uv.size() != theirs.uv.size())
       return Failed(f, "instance boundary differs");
     const gp_Trsf& trsf = model.face_placement[face_id - 1];

@@ -9,6 +9,7 @@
 #include "grids.h"
 #include "measure.h"
 #include "node_ref.h"
+#include "pcurves.h"
 #include "rdmesh/context.h"
 #include "rdmesh/mesh.h"
 
@@ -27,7 +28,8 @@ class FaceSurfaces {
   explicit FaceSurfaces(int face_count);
   ~FaceSurfaces();
   /// An evaluator of face `face_id` for one task; valid while this object lives.
-  std::unique_ptr<Surface> Lend(const Model& model, int face_id, bool nurbs);
+  std::unique_ptr<Surface> Lend(const Model& model, const FacePcurves& pcurves, int face_id,
+                                bool nurbs);
 
  private:
   std::vector<std::unique_ptr<Surface>> exact_, nurbs_;
@@ -53,13 +55,14 @@ std::string BrepReason(double deviation, double gap, double tolerance, double mi
 /// Meshes face `face_id` of the model. Never throws: OCCT failures and bad loops come back as a
 /// kFailed FaceMesh with the reason. Boundary nodes keep their B-rep classification in `refs`
 /// (one per FaceMesh node) for assembly.
-FaceMesh MeshFace(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
-                  const FaceJob& job, Context* context, std::vector<NodeRef>* refs);
+FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
+                  const std::vector<EdgeGrid>& grids, const FaceJob& job, Context* context,
+                  std::vector<NodeRef>* refs);
 
 /// The mesh of an instanced copy: the representative's interior nodes moved by the placement,
 /// the boundary rebuilt exactly from the copy's own edges.
-FaceMesh PlaceCopy(const Model& model, int face_id, const FaceMesh& representative,
-                   const std::vector<NodeRef>& representative_refs,
+FaceMesh PlaceCopy(const Model& model, const FacePcurves& pcurves, int face_id,
+                   const FaceMesh& representative, const std::vector<NodeRef>& representative_refs,
                    const std::vector<EdgeGrid>& grids, std::vector<NodeRef>* refs);
 
 }  // namespace rdmesh

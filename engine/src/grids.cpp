@@ -18,6 +18,7 @@
 #include "model.h"
 #include "model_info.h"
 #include "parallel.h"
+#include "pcurves.h"
 #include "surface.h"
 
 namespace rdmesh {
@@ -133,8 +134,8 @@ std::vector<double> NarrowFaceLimits(const Model& model, const GridCriteria& gc,
 
 // The faces beside an edge whose limit is below `max_sagitta`, as EdgeGrid sides: each holds
 // its own surface evaluator and pcurve (one thread uses them).
-std::vector<EdgeSide> NarrowSides(const Model& model, const TopoDS_Edge& edge,
-                                  const TopTools_ListOfShape* faces,
+std::vector<EdgeSide> NarrowSides(const Model& model, const FacePcurves& pcurves,
+                                  const TopoDS_Edge& edge, const TopTools_ListOfShape* faces,
                                   const std::vector<double>& limit, double max_sagitta) {
   std::vector<EdgeSide> sides;
   if (!faces) return sides;
@@ -145,10 +146,9 @@ std::vector<EdgeSide> NarrowSides(const Model& model, const TopoDS_Edge& edge,
     seen.push_back(f);
     if (!(limit[f - 1] < max_sagitta)) continue;
     const TopoDS_Face& face = TopoDS::Face(shape);
-    double first, last;
-    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last);
+    Handle(Geom2d_Curve) pcurve = pcurves.Find(model, f, face, edge).curve;
     if (pcurve.IsNull()) continue;
-    std::shared_ptr<Surface> surface = MakeFaceSurface(face, false);
+    std::shared_ptr<Surface> surface = MakeFaceSurface(face, false, pcurves.Bounds(model, f));
     sides.push_back({[surface, pcurve](double t) {
                        gp_Pnt2d q = pcurve->Value(t);
                        return surface->Normal(q.X(), q.Y());
@@ -204,8 +204,9 @@ double FaceGap(const Adaptor3d_Surface& surface, const Geom2d_Curve& pcurve, dou
 
 // The largest FaceGap over the edge's faces that have a pcurve: a first look at kGapSamples
 // steps, and on a face where that finds more than `ignored`, a finer one.
-double EdgeFaceGap(const Model& model, const TopoDS_Edge& edge, Curve& curve, double first,
-                   double last, const TopTools_ListOfShape* faces, double ignored) {
+double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, const TopoDS_Edge& edge,
+                   Curve& curve, double first, double last, const TopTools_ListOfShape* faces,
+                   double ignored) {
   double gap = 0;
   if (!faces) return gap;
   std::vector<int> seen;
@@ -214,8 +215,9 @@ double EdgeFaceGap(const Model& model, const TopoDS_Edge& edge, Curve& curve, do
     if (f <= 0 || std::find(seen.begin(), seen.end(), f) != seen.end()) continue;
     seen.push_back(f);
     const TopoDS_Face& face = TopoDS::Face(shape);
-    double p0, p1;
-    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, p0, p1);
+    const Pcurve found = pcurves.Find(model, f, face, edge);
+    const Handle(Geom2d_Curve)& pcurve = found.curve;
+    const double p0 = found.first, p1 = found.last;
     if (pcurve.IsNull()) continue;
     // OCCT's adaptor (the face's placement applied): a handful of points, no tables to build.
     const BRepAdaptor_Surface surface(face, false);
@@ -229,8 +231,8 @@ double EdgeFaceGap(const Model& model, const TopoDS_Edge& edge, Curve& curve, do
 
 }  // namespace
 
-Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
-                      const std::vector<bool>& edge_needed, Context* context,
+Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const GridCriteria& gc,
+                      int threads, const std::vector<bool>& edge_needed, Context* context,
                       std::vector<EdgeGrid>* grids) {
   const int ne = model.edge_count();
   grids->assign(ne, EdgeGrid());
@@ -239,19 +241,18 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
   // The first edge id of each TShape computes the parameters; the others copy them.
   std::vector<int> source(ne);
   std::unordered_map<const void*, int> first;
+  for (int e = 1; e <= ne; ++e)
+    source[e - 1] = first.emplace(model.edge(e).TShape().get(), e).first->second;
+  const ParallelRunner runner(threads);
   std::vector<double> factor(ne, 1.0);
-  for (int e = 1; e <= ne; ++e) {
-    const TopoDS_Edge& edge = model.edge(e);
-    source[e - 1] = first.emplace(edge.TShape().get(), e).first->second;
-    const TopTools_ListOfShape* faces = edge_faces.Seek(edge);
-    if (faces)
+  runner.For(1, ne + 1, [&](int e) {
+    if (const TopTools_ListOfShape* faces = edge_faces.Seek(model.edge(e)))
       for (const TopoDS_Shape& f : *faces)
         if (!Developable(TopoDS::Face(f))) factor[e - 1] = gc.curved_face_factor;
-  }
+  });
   for (int e = 1; e <= ne; ++e)
     factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
 
-  const ParallelRunner runner(threads);
   const std::vector<double> narrow = NarrowFaceLimits(model, gc, runner);
 
   auto build = [&](int e, bool params) {
@@ -279,7 +280,7 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
           const double ignored = kGapIgnored * gc.max_deviation;
           const TopTools_ListOfShape* faces = edge_faces.Seek(model.edge(e));
           const double gap =
-              ignored > 0 ? EdgeFaceGap(model, edge, *curve, f, l, faces, ignored) : 0;
+              ignored > 0 ? EdgeFaceGap(model, pcurves, edge, *curve, f, l, faces, ignored) : 0;
           if (gap > ignored && gap < gc.max_deviation)
             c.max_sagitta = std::min(
                 c.max_sagitta, std::max(gc.max_deviation - gap, kMinChordShare * gc.max_deviation));
@@ -291,7 +292,7 @@ Status BuildEdgeGrids(const Model& model, const GridCriteria& gc, int threads,
           Vec3 start = curve->Point(f), end = curve->Point(l), mid = curve->Point(0.5 * (f + l));
           bool loops = g.first_vertex == g.last_vertex || Dist(start, end) < 0.5 * Dist(start, mid);
           c.min_segments = loops ? 3 : 1;
-          c.sides = NarrowSides(model, edge, faces, narrow, c.max_sagitta);
+          c.sides = NarrowSides(model, pcurves, edge, faces, narrow, c.max_sagitta);
           g.t = DiscretizeCurve(*curve, f, l, c, context);
           // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
           // and faces see it as a pole segment (its pcurve may still span the face).

@@ -10,6 +10,7 @@
 
 namespace rdmesh {
 
+class FacePcurves;
 class Model;
 
 /// One B-rep edge's grid: curve parameters and world points, endpoints at the vertices.
@@ -39,8 +40,8 @@ struct GridCriteria {
 };
 
 /// Grids indexed by edge id - 1. `edge_needed[e-1]` false skips an edge (face subsets).
-Status BuildEdgeGrids(const Model& model, const GridCriteria& criteria, int threads,
-                      const std::vector<bool>& edge_needed, Context* context,
+Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const GridCriteria& criteria,
+                      int threads, const std::vector<bool>& edge_needed, Context* context,
                       std::vector<EdgeGrid>* grids);
 
 }  // namespace rdmesh

@@ -20,14 +20,15 @@ namespace {
 constexpr int kMaxRounds = 12;
 
 // Grid segments [t[k], t[k+1]] to split, as (edge id, k), for the conflicts of one face.
-std::vector<std::pair<int, int>> SplitsForFace(const Model& model, int face_id,
-                                               const std::vector<EdgeGrid>& grids, bool nurbs,
-                                               const Context* context) {
+std::vector<std::pair<int, int>> SplitsForFace(const Model& model, const FacePcurves& pcurves,
+                                               int face_id, const std::vector<EdgeGrid>& grids,
+                                               bool nurbs, const Context* context) {
   std::vector<std::pair<int, int>> splits;
   try {
-    std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), nurbs);
+    std::unique_ptr<Surface> surface =
+        MakeFaceSurface(model.face(face_id), nurbs, pcurves.Bounds(model, face_id));
     FaceDomain domain;
-    if (!BuildFaceDomain(model, face_id, grids, *surface, &domain).ok()) return splits;
+    if (!BuildFaceDomain(model, pcurves, face_id, grids, *surface, &domain).ok()) return splits;
     for (const DomainConflict& c : FindConflicts(domain, context)) {
       for (int s : {c.a, c.b}) {
         if (s < 0 || domain.segment_edge[s] == 0 || domain.segment_splittable[s]) continue;
@@ -42,8 +43,9 @@ std::vector<std::pair<int, int>> SplitsForFace(const Model& model, int face_id,
 
 }  // namespace
 
-Status HealEdgeGrids(const Model& model, const std::vector<int>& faces, bool nurbs, int threads,
-                     Context* context, std::vector<EdgeGrid>* grids, HealStats* stats) {
+Status HealEdgeGrids(const Model& model, const FacePcurves& pcurves, const std::vector<int>& faces,
+                     bool nurbs, int threads, Context* context, std::vector<EdgeGrid>* grids,
+                     HealStats* stats) {
   HealStats local;
   if (!stats) stats = &local;
   *stats = HealStats();
@@ -68,7 +70,7 @@ Status HealEdgeGrids(const Model& model, const std::vector<int>& faces, bool nur
     std::vector<std::vector<std::pair<int, int>>> found(todo.size());
     runner.For(0, static_cast<int>(todo.size()), [&](int i) {
       if (context && context->ShouldStop()) return;
-      found[i] = SplitsForFace(model, faces[todo[i]], *grids, nurbs, context);
+      found[i] = SplitsForFace(model, pcurves, faces[todo[i]], *grids, nurbs, context);
     });
     if (context && context->ShouldStop()) return context->StopStatus();
     ++stats->rounds;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "grids.h"
+#include "pcurves.h"
 #include "rdmesh/context.h"
 #include "rdmesh/status.h"
 
@@ -24,7 +25,8 @@ struct HealStats {
 /// Splits grid segments (indexed by edge id - 1) until the domains of `faces` (face ids) have no
 /// DomainConflict, or no split helps any more. Faces whose domain cannot be built are left to
 /// fail with their reason when they are meshed. `nurbs` as in FaceJob. Only fails when stopped.
-Status HealEdgeGrids(const Model& model, const std::vector<int>& faces, bool nurbs, int threads,
-                     Context* context, std::vector<EdgeGrid>* grids, HealStats* stats = nullptr);
+Status HealEdgeGrids(const Model& model, const FacePcurves& pcurves, const std::vector<int>& faces,
+                     bool nurbs, int threads, Context* context, std::vector<EdgeGrid>* grids,
+                     HealStats* stats = nullptr);
 
 }  // namespace rdmesh

@@ -15,6 +15,7 @@
 #include "heal.h"
 #include "model.h"
 #include "parallel.h"
+#include "pcurves.h"
 
 namespace rdmesh {
 
@@ -93,23 +94,24 @@ Result<Selection> SelectFaces(const Model& model, const MeshOptions& options) {
   return sel;
 }
 
-// 2. Edge grids: every needed edge discretised once.
-Status MakeEdgeGrids(const Model& model, const MeshOptions& options, double deviation,
-                     const Selection& sel, Context* context, std::vector<EdgeGrid>* grids) {
+// 3. Edge grids: every needed edge discretised once.
+Status MakeEdgeGrids(const Model& model, const FacePcurves& pcurves, const MeshOptions& options,
+                     double deviation, const Selection& sel, Context* context,
+                     std::vector<EdgeGrid>* grids) {
   if (context) context->ReportProgress({Progress::Stage::kEdges, 0, model.edge_count()});
   GridCriteria gc;
   gc.max_deviation = deviation;
   gc.rd_tolerance = options.rd_tolerance / 5;  // faces carry ~5x the RD of their edges
   gc.max_length = options.max_edge_length;
   gc.min_length = options.min_edge_length;
-  return BuildEdgeGrids(model, gc, options.threads, sel.edge_needed, context, grids);
+  return BuildEdgeGrids(model, pcurves, gc, options.threads, sel.edge_needed, context, grids);
 }
 
-// 4. Mesh faces, in parallel; each slot is written by one task.
-Status MeshFaces(const Model& model, const MeshOptions& options, double deviation,
-                 const Selection& sel, const std::vector<EdgeGrid>& grids, FaceSurfaces* surfaces,
-                 Context* context, FaceReporter* reporter, std::vector<FaceMesh>* faces,
-                 std::vector<std::vector<NodeRef>>* refs) {
+// 5. Mesh faces, in parallel; each slot is written by one task.
+Status MeshFaces(const Model& model, const FacePcurves& pcurves, const MeshOptions& options,
+                 double deviation, const Selection& sel, const std::vector<EdgeGrid>& grids,
+                 FaceSurfaces* surfaces, Context* context, FaceReporter* reporter,
+                 std::vector<FaceMesh>* faces, std::vector<std::vector<NodeRef>>* refs) {
   FaceJob job;
   job.criteria.max_deviation = deviation;
   job.criteria.rd_tolerance = options.rd_tolerance;
@@ -124,7 +126,7 @@ Status MeshFaces(const Model& model, const MeshOptions& options, double deviatio
       [&](int i) {
         int f = sel.todo[i];
         if (Stopped(context)) return;
-        (*faces)[f - 1] = MeshFace(model, f, grids, job, context, &(*refs)[f - 1]);
+        (*faces)[f - 1] = MeshFace(model, pcurves, f, grids, job, context, &(*refs)[f - 1]);
         if (sel.wanted[f - 1]) reporter->Finished((*faces)[f - 1]);
       },
       Partition::kOnePerTask);
@@ -132,11 +134,12 @@ Status MeshFaces(const Model& model, const MeshOptions& options, double deviatio
   return Status::Ok();
 }
 
-// 5. Place instances: copies reuse their representative's mesh; faces not asked for (and
+// 6. Place instances: copies reuse their representative's mesh; faces not asked for (and
 // representatives meshed only for their copies) are skipped.
-Status PlaceInstances(const Model& model, const Selection& sel, const std::vector<EdgeGrid>& grids,
-                      int threads, Context* context, FaceReporter* reporter,
-                      std::vector<FaceMesh>* faces, std::vector<std::vector<NodeRef>>* refs) {
+Status PlaceInstances(const Model& model, const FacePcurves& pcurves, const Selection& sel,
+                      const std::vector<EdgeGrid>& grids, int threads, Context* context,
+                      FaceReporter* reporter, std::vector<FaceMesh>* faces,
+                      std::vector<std::vector<NodeRef>>* refs) {
   const int nf = model.face_count();
   // The copies in parallel: each task writes its own slot and refs, only reads its
   // representative's, and makes its own evaluators (FaceSurfaces lends a face's to one task at a
@@ -149,7 +152,7 @@ Status PlaceInstances(const Model& model, const Selection& sel, const std::vecto
     if (Stopped(context)) return;
     const int f = copies[i], rep = model.face_representative[f - 1];
     (*faces)[f - 1] =
-        PlaceCopy(model, f, (*faces)[rep - 1], (*refs)[rep - 1], grids, &(*refs)[f - 1]);
+        PlaceCopy(model, pcurves, f, (*faces)[rep - 1], (*refs)[rep - 1], grids, &(*refs)[f - 1]);
   });
   if (Stopped(context)) return context->StopStatus();
   for (int f : copies) reporter->Finished((*faces)[f - 1]);
@@ -162,7 +165,7 @@ Status PlaceInstances(const Model& model, const Selection& sel, const std::vecto
   return Status::Ok();
 }
 
-// 7. Summarise: counts, areas and the largest estimated deviation of the assembled result.
+// 8. Summarise: counts, areas and the largest estimated deviation of the assembled result.
 void Summarise(const std::vector<EdgeGrid>& grids, double deviation, MeshResult* result) {
   MeshSummary& s = result->summary;
   s.triangles = result->mesh.triangle_count();
@@ -196,11 +199,18 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   Result<Selection> sel = SelectFaces(model, options);
   if (!sel.ok()) return sel.status();
 
+  // 2. Pcurves: each face's, looked up once for the stages that follow.
+  std::vector<int> faces;
+  for (int f = 1; f <= model.face_count(); ++f)
+    if (sel->wanted[f - 1] || sel->mesh_it[f - 1]) faces.push_back(f);
+  const FacePcurves pcurves = FacePcurves::Build(model, faces, options.threads, context);
+  if (Stopped(context)) return context->StopStatus();
+
   std::vector<EdgeGrid> grids;
-  Status st = MakeEdgeGrids(model, options, deviation, *sel, context, &grids);
+  Status st = MakeEdgeGrids(model, pcurves, options, deviation, *sel, context, &grids);
   if (!st.ok()) return st;
-  // 3. Heal: split grid segments until every face's boundary loops are valid in (u,v).
-  st = HealEdgeGrids(model, sel->todo, options.nurbs, options.threads, context, &grids);
+  // 4. Heal: split grid segments until every face's boundary loops are valid in (u,v).
+  st = HealEdgeGrids(model, pcurves, sel->todo, options.nurbs, options.threads, context, &grids);
   if (!st.ok()) return st;
   result.summary.edge_seconds = Since(t0);
 
@@ -209,15 +219,15 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   std::vector<std::vector<NodeRef>> refs(model.face_count());
   if (context) context->ReportProgress({Progress::Stage::kFaces, 0, total});
   FaceReporter reporter(context, total);
-  st = MeshFaces(model, options, deviation, *sel, grids, surfaces, context, &reporter,
+  st = MeshFaces(model, pcurves, options, deviation, *sel, grids, surfaces, context, &reporter,
                  &result.faces, &refs);
   if (!st.ok()) return st;
-  st =
-      PlaceInstances(model, *sel, grids, options.threads, context, &reporter, &result.faces, &refs);
+  st = PlaceInstances(model, pcurves, *sel, grids, options.threads, context, &reporter,
+                      &result.faces, &refs);
   if (!st.ok()) return st;
   result.summary.face_seconds = Since(t1);
 
-  // 6. Assemble, in face order.
+  // 7. Assemble, in face order.
   if (context) context->ReportProgress({Progress::Stage::kAssembly, total, total});
   Assemble(&result.faces, refs, &result.mesh);
   Summarise(grids, deviation, &result);

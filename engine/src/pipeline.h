@@ -1,8 +1,8 @@
 #pragma once
-// One meshing run at one absolute deviation, in the stages of BRepMesh: select faces, edge grids,
-// heal, mesh faces, place instances, assemble, summarise. Edge grids are made once per edge, the
-// faces in parallel worker threads, and assembly goes in face order, so the output does not
-// depend on the thread count.
+// One meshing run at one absolute deviation, in the stages of BRepMesh: select faces, pcurves,
+// edge grids, heal, mesh faces, place instances, assemble, summarise. Edge grids are made once per
+// edge, the faces in parallel worker threads, and assembly goes in face order, so the output does
+// not depend on the thread count.
 
 #include "rdmesh/context.h"
 #include "rdmesh/mesh.h"

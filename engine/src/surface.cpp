@@ -474,9 +474,15 @@ std::unique_ptr<Surface> WithPointCache(std::unique_ptr<Surface> surface) {
 }
 
 std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs) {
+  UvBounds bounds;
+  BRepTools::UVBounds(face, bounds.umin, bounds.umax, bounds.vmin, bounds.vmax);
+  return MakeFaceSurface(face, nurbs, bounds);
+}
+
+std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs,
+                                         const UvBounds& bounds) {
   Handle(Geom_Surface) surface = BRep_Tool::Surface(face);  // location applied
-  double u0, u1, v0, v1;
-  BRepTools::UVBounds(face, u0, u1, v0, v1);
+  const double u0 = bounds.umin, u1 = bounds.umax, v0 = bounds.vmin, v1 = bounds.vmax;
   if (nurbs) {
     Handle(Geom_Surface) trimmed = new Geom_RectangularTrimmedSurface(surface, u0, u1, v0, v1);
     surface = GeomConvert::SurfaceToBSplineSurface(trimmed);

@@ -76,9 +76,17 @@ std::unique_ptr<Curve> MakeCircleCurve(double radius, double z0);
 /// same bits of u and v. A bounded, direct-mapped table; Normal() is passed through.
 std::unique_ptr<Surface> WithPointCache(std::unique_ptr<Surface> surface);
 
+/// A face's (u,v) bounds, as BRepTools::UVBounds gives them.
+struct UvBounds {
+  double umin = 0, umax = 0, vmin = 0, vmax = 0;
+};
+
 /// OCCT evaluators for a located face / edge (the location is applied: world coordinates).
 /// `nurbs` converts the surface to a B-spline first.
 std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs);
+/// The same with the face's BRepTools::UVBounds already at hand (FacePcurves::Bounds).
+std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs,
+                                         const UvBounds& bounds);
 /// Null when the edge has no 3D curve (degenerate edges).
 std::unique_ptr<Curve> MakeEdgeCurve(const TopoDS_Edge& edge);
 

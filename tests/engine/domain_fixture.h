@@ -18,24 +18,39 @@
 #include "face_domain.h"
 #include "grids.h"
 #include "model.h"
+#include "pcurves.h"
 #include "surface.h"
 
 namespace rdmesh::testing {
+
+/// Every face id of the model.
+inline std::vector<int> AllFaces(const Model& model) {
+  std::vector<int> faces(model.face_count());
+  for (int f = 1; f <= model.face_count(); ++f) faces[f - 1] = f;
+  return faces;
+}
+
+/// The pcurves of every face, as a run looks them up.
+inline FacePcurves Pcurves(const Model& model) {
+  return FacePcurves::Build(model, AllFaces(model), 1, nullptr);
+}
 
 /// The edge grids of every edge at an absolute max deviation, on one thread.
 inline std::vector<EdgeGrid> Grids(const Model& model, double max_deviation) {
   GridCriteria criteria;
   criteria.max_deviation = max_deviation;
   std::vector<EdgeGrid> grids;
-  EXPECT_TRUE(BuildEdgeGrids(model, criteria, 1, {}, nullptr, &grids).ok());
+  EXPECT_TRUE(BuildEdgeGrids(model, Pcurves(model), criteria, 1, {}, nullptr, &grids).ok());
   return grids;
 }
 
 /// The (u,v) domain of face `face_id` on its exact surface.
 inline Status Domain(const Model& model, int face_id, const std::vector<EdgeGrid>& grids,
                      FaceDomain* domain) {
-  std::unique_ptr<Surface> surface = MakeFaceSurface(model.face(face_id), false);
-  return BuildFaceDomain(model, face_id, grids, *surface, domain);
+  const FacePcurves pcurves = Pcurves(model);
+  std::unique_ptr<Surface> surface =
+      MakeFaceSurface(model.face(face_id), false, pcurves.Bounds(model, face_id));
+  return BuildFaceDomain(model, pcurves, face_id, grids, *surface, domain);
 }
 
 /// A disc of radius 1.5875 with a concentric hole of radius 1.0795 (a face of a real assembly).

@@ -86,7 +86,8 @@ TEST(FaceDomainTest, CoarseHoleCrossesTheOuterLoopUntilHealed) {
       << DescribeConflict(domain, conflicts.front());
 
   HealStats stats;
-  ASSERT_TRUE(HealEdgeGrids(*model, {1}, false, 1, nullptr, &grids, &stats).ok());
+  ASSERT_TRUE(
+      HealEdgeGrids(*model, testing::Pcurves(*model), {1}, false, 1, nullptr, &grids, &stats).ok());
   EXPECT_GT(stats.splits, 0);
   ASSERT_TRUE(Domain(*model, 1, grids, &domain).ok());
   EXPECT_TRUE(FindConflicts(domain).empty());

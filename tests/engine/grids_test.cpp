@@ -22,6 +22,7 @@
 #include <gp_Pln.hxx>
 #include <vector>
 
+#include "domain_fixture.h"
 #include "model.h"
 #include "shape_fixture.h"
 
@@ -61,7 +62,8 @@ TEST(GridsTest, ChordsOfANarrowFaceStayWithinAFractionOfItsWidth) {
   GridCriteria criteria;
   criteria.max_deviation = 0.12;
   std::vector<EdgeGrid> grids;
-  ASSERT_TRUE(BuildEdgeGrids(*model, criteria, 1, {}, nullptr, &grids).ok());
+  ASSERT_TRUE(
+      BuildEdgeGrids(*model, testing::Pcurves(*model), criteria, 1, {}, nullptr, &grids).ok());
   const double area = M_PI * (kRim * kRim - kHole * kHole);
   const double perimeter = 2 * M_PI * (kRim + kHole);
   const double limit = criteria.narrow_face_fraction * area / perimeter;
@@ -105,7 +107,8 @@ TEST(GridsTest, ChordsLeaveRoomForTheGapBetweenAnEdgeAndItsFace) {
   GridCriteria criteria;
   criteria.max_deviation = kDeviation;
   std::vector<EdgeGrid> grids;
-  ASSERT_TRUE(BuildEdgeGrids(*model, criteria, 1, {}, nullptr, &grids).ok());
+  ASSERT_TRUE(
+      BuildEdgeGrids(*model, testing::Pcurves(*model), criteria, 1, {}, nullptr, &grids).ok());
   const EdgeGrid& g = grids[0];
   ASSERT_GE(g.xyz.size(), 4u);
   double sagitta = 0;
@@ -125,7 +128,8 @@ TEST(GridsTest, ChordsOfAnEdgeOnItsFaceTakeTheWholeDeviation) {
   GridCriteria criteria;
   criteria.max_deviation = 0.01;
   std::vector<EdgeGrid> grids;
-  ASSERT_TRUE(BuildEdgeGrids(*model, criteria, 1, {}, nullptr, &grids).ok());
+  ASSERT_TRUE(
+      BuildEdgeGrids(*model, testing::Pcurves(*model), criteria, 1, {}, nullptr, &grids).ok());
   double sagitta = 0;
   for (size_t k = 0; k + 1 < grids[0].xyz.size(); ++k)
     sagitta = std::max(sagitta, 1.0 - Norm(0.5 * (grids[0].xyz[k] + grids[0].xyz[k + 1])));

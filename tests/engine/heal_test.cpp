@@ -21,15 +21,11 @@
 namespace rdmesh {
 namespace {
 
+using testing::AllFaces;
 using testing::DiscWithHole;
 using testing::Domain;
 using testing::Grids;
-
-std::vector<int> AllFaces(const Model& model) {
-  std::vector<int> faces(model.face_count());
-  for (int f = 1; f <= model.face_count(); ++f) faces[f - 1] = f;
-  return faces;
-}
+using testing::Pcurves;
 
 int FacesWithConflicts(const Model& model, const std::vector<EdgeGrid>& grids) {
   int n = 0;
@@ -53,7 +49,9 @@ TEST(HealTest, GridsThatFitEveryFaceAreLeftAlone) {
   std::vector<EdgeGrid> grids = Grids(*model, 0.01);
   const std::vector<EdgeGrid> before = grids;
   HealStats stats;
-  ASSERT_TRUE(HealEdgeGrids(*model, AllFaces(*model), false, 1, nullptr, &grids, &stats).ok());
+  ASSERT_TRUE(
+      HealEdgeGrids(*model, Pcurves(*model), AllFaces(*model), false, 1, nullptr, &grids, &stats)
+          .ok());
   EXPECT_EQ(stats.rounds, 1);
   EXPECT_EQ(stats.splits, 0);
   ASSERT_EQ(grids.size(), before.size());
@@ -67,7 +65,9 @@ TEST(HealTest, SplitsLandOnTheCurveAndClearEveryFaceOnTheEdge) {
   const std::vector<EdgeGrid> before = grids;
   ASSERT_GE(FacesWithConflicts(*model, grids), 2);  // the top and the bottom
   HealStats stats;
-  ASSERT_TRUE(HealEdgeGrids(*model, AllFaces(*model), false, 1, nullptr, &grids, &stats).ok());
+  ASSERT_TRUE(
+      HealEdgeGrids(*model, Pcurves(*model), AllFaces(*model), false, 1, nullptr, &grids, &stats)
+          .ok());
   EXPECT_GT(stats.splits, 0);
   EXPECT_GE(stats.rounds, 1);
   EXPECT_EQ(FacesWithConflicts(*model, grids), 0);
@@ -98,8 +98,12 @@ TEST(HealTest, SameGridsAtAnyThreadCount) {
   ASSERT_TRUE(model);
   std::vector<EdgeGrid> one = Grids(*model, 1.0), two = one;
   HealStats stats_one, stats_two;
-  ASSERT_TRUE(HealEdgeGrids(*model, AllFaces(*model), false, 1, nullptr, &one, &stats_one).ok());
-  ASSERT_TRUE(HealEdgeGrids(*model, AllFaces(*model), false, 2, nullptr, &two, &stats_two).ok());
+  ASSERT_TRUE(
+      HealEdgeGrids(*model, Pcurves(*model), AllFaces(*model), false, 1, nullptr, &one, &stats_one)
+          .ok());
+  ASSERT_TRUE(
+      HealEdgeGrids(*model, Pcurves(*model), AllFaces(*model), false, 2, nullptr, &two, &stats_two)
+          .ok());
   EXPECT_GT(stats_one.splits, 0);
   EXPECT_EQ(stats_one.splits, stats_two.splits);
   EXPECT_EQ(stats_one.rounds, stats_two.rounds);
@@ -118,8 +122,9 @@ TEST(HealTest, StopsWhenTheContextIsCancelled) {
   std::vector<EdgeGrid> grids = Grids(*model, 1.0);
   Context context;
   context.Cancel();
-  EXPECT_EQ(HealEdgeGrids(*model, AllFaces(*model), false, 1, &context, &grids).code(),
-            StatusCode::kCancelled);
+  EXPECT_EQ(
+      HealEdgeGrids(*model, Pcurves(*model), AllFaces(*model), false, 1, &context, &grids).code(),
+      StatusCode::kCancelled);
 }
 
 }  // namespace

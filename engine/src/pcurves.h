@@ -1,0 +1,95 @@
+#pragma once
+// The pcurves of a run's faces, looked up once: each face's wires in walking order with the
+// pcurves of their edges, its (u,v) bounds, and the pcurve of any of its edges, in parallel,
+// before the edge grids. OCCT answers BRep_Tool::CurveOnSurface for an edge of a plane that stores
+// no pcurve by projecting the edge's curve anew, BRepTools::UVBounds asks that of every edge of
+// the face, and BRepTools_WireExplorer maps the wire's vertices; the edge grids, healing and each
+// face's domain asked all this several times per face and edge, and with two threads the
+// reference counts of the locations those lookups copy were shared by both (bench/RESULTS.md,
+// "Pcurves looked up once").
+
+#include <Geom2d_Curve.hxx>
+#include <Standard_Handle.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <vector>
+
+#include "rdmesh/context.h"
+#include "rdmesh/status.h"
+#include "surface.h"
+
+namespace rdmesh {
+
+class Model;
+
+/// An edge's curve in a face's (u,v) and its parameter range; a null curve when the face has
+/// none for the edge.
+struct Pcurve {
+  Handle(Geom2d_Curve) curve;
+  double first = 0, last = 0;
+};
+
+/// One edge of a face's wire, as BRepTools_WireExplorer walks it: its edge id (0 when the
+/// model's edge map lacks it), whether the face uses it REVERSED, and its pcurve on the face
+/// (null when there is none).
+struct WireEdge {
+  int eid = 0;
+  bool reversed = false;
+  Handle(Geom2d_Curve) pcurve;
+};
+
+/// A wire of a face: its FORWARD and REVERSED edges in walking order. `reached` fails when the
+/// walk could not reach them all (edges that do not connect end to end).
+struct FaceWire {
+  std::vector<WireEdge> edges;
+  Status reached;
+};
+
+/// The wires of a face (its FORWARD orientation), and the periods of its surface (0 where it is
+/// not periodic).
+struct FaceLoops {
+  std::vector<FaceWire> wires;
+  double period_u = 0, period_v = 0;
+};
+
+/// What faces a run works on know of their pcurves. Read-only once built, from any thread. A
+/// face it was not built for, or one OCCT failed on while it was built, is looked up from OCCT
+/// at every call, with OCCT's exceptions: the same answers either way.
+class FacePcurves {
+ public:
+  /// Nothing built: every lookup goes to OCCT.
+  FacePcurves() = default;
+
+  /// Looks up the pcurves and bounds of `faces` (face ids), in parallel.
+  static FacePcurves Build(const Model& model, const std::vector<int>& faces, int threads,
+                           Context* context);
+
+  /// BRep_Tool::CurveOnSurface(edge, face): `face` is model.face(face_id) in any orientation,
+  /// `edge` one of its edges (the orientation picks a seam's side, as in OCCT).
+  Pcurve Find(const Model& model, int face_id, const TopoDS_Face& face,
+              const TopoDS_Edge& edge) const;
+
+  /// BRepTools::UVBounds of face `face_id`.
+  UvBounds Bounds(const Model& model, int face_id) const;
+
+  /// The loops of face `face_id`: the table's, or for a face it was not built for, looked up
+  /// from OCCT into `scratch` (with OCCT's exceptions).
+  const FaceLoops& Loops(const Model& model, int face_id, FaceLoops* scratch) const;
+
+ private:
+  struct Entry {
+    TopoDS_Edge edge;  // as the FORWARD face holds it
+    Pcurve pcurve;
+  };
+  struct Face {
+    bool built = false;
+    UvBounds bounds;
+    std::vector<Entry> entries;
+    FaceLoops loops;
+  };
+  const Face* Built(int face_id) const;
+
+  std::vector<Face> faces_;  // per face id - 1
+};
+
+}  // namespace rdmesh
