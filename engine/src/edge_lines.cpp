@@ -10,8 +10,6 @@
 #include <Geom_Surface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
-#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
-#include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
 #include <algorithm>
@@ -144,13 +142,6 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
   std::vector<bool> meshed(model.face_count() + 1, false);
   for (int32_t f : mesh.triangle_face)
     if (f >= 1 && f <= model.face_count()) meshed[f] = true;
-  TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
-  try {
-    TopExp::MapShapesAndAncestors(model.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
-  } catch (const Standard_Failure& failure) {
-    return Status(StatusCode::kInternal,
-                  std::string("edge lines: no edge-face map: ") + failure.GetMessageString());
-  }
 
   std::vector<EdgeLine> lines;
   for (int e = 1; e <= ne; ++e) {
@@ -159,18 +150,12 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
       EdgeLine line;
       line.edge_id = e;
       bool any_meshed = false;
-      if (const TopTools_ListOfShape* faces = edge_faces.Seek(edge)) {
-        for (const TopoDS_Shape& face : *faces) {
-          int f = model.faces.FindIndex(face);
-          if (f < 1) continue;
-          line.faces.push_back(f);
-          any_meshed = any_meshed || meshed[f];
-          line.seam = line.seam || BRep_Tool::IsClosed(edge, TopoDS::Face(face));
-        }
+      for (int f : model.edge_faces[e - 1]) {  // each once, ascending
+        line.faces.push_back(f);
+        any_meshed = any_meshed || meshed[f];
+        line.seam = line.seam || BRep_Tool::IsClosed(edge, model.face(f));
       }
       if (!any_meshed) continue;
-      std::sort(line.faces.begin(), line.faces.end());
-      line.faces.erase(std::unique(line.faces.begin(), line.faces.end()), line.faces.end());
 
       TopoDS_Vertex first, last;
       TopExp::Vertices(TopoDS::Edge(edge.Oriented(TopAbs_FORWARD)), first, last);

@@ -6,8 +6,6 @@
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
-#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
-#include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
 #include <algorithm>
@@ -135,17 +133,12 @@ std::vector<double> NarrowFaceLimits(const Model& model, const GridCriteria& gc,
 // The faces beside an edge whose limit is below `max_sagitta`, as EdgeGrid sides: each holds
 // its own surface evaluator and pcurve (one thread uses them).
 std::vector<EdgeSide> NarrowSides(const Model& model, const FacePcurves& pcurves,
-                                  const TopoDS_Edge& edge, const TopTools_ListOfShape* faces,
+                                  const TopoDS_Edge& edge, const std::vector<int>& faces,
                                   const std::vector<double>& limit, double max_sagitta) {
   std::vector<EdgeSide> sides;
-  if (!faces) return sides;
-  std::vector<int> seen;
-  for (const TopoDS_Shape& shape : *faces) {
-    int f = model.faces.FindIndex(shape);
-    if (f <= 0 || std::find(seen.begin(), seen.end(), f) != seen.end()) continue;
-    seen.push_back(f);
+  for (int f : faces) {
     if (!(limit[f - 1] < max_sagitta)) continue;
-    const TopoDS_Face& face = TopoDS::Face(shape);
+    const TopoDS_Face& face = model.face(f);
     Handle(Geom2d_Curve) pcurve = pcurves.Find(model, f, face, edge).curve;
     if (pcurve.IsNull()) continue;
     std::shared_ptr<Surface> surface = MakeFaceSurface(face, false, pcurves.Bounds(model, f));
@@ -205,16 +198,11 @@ double FaceGap(const Adaptor3d_Surface& surface, const Geom2d_Curve& pcurve, dou
 // The largest FaceGap over the edge's faces that have a pcurve: a first look at kGapSamples
 // steps, and on a face where that finds more than `ignored`, a finer one.
 double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, const TopoDS_Edge& edge,
-                   Curve& curve, double first, double last, const TopTools_ListOfShape* faces,
+                   Curve& curve, double first, double last, const std::vector<int>& faces,
                    double ignored) {
   double gap = 0;
-  if (!faces) return gap;
-  std::vector<int> seen;
-  for (const TopoDS_Shape& shape : *faces) {
-    const int f = model.faces.FindIndex(shape);
-    if (f <= 0 || std::find(seen.begin(), seen.end(), f) != seen.end()) continue;
-    seen.push_back(f);
-    const TopoDS_Face& face = TopoDS::Face(shape);
+  for (int f : faces) {
+    const TopoDS_Face& face = model.face(f);
     const Pcurve found = pcurves.Find(model, f, face, edge);
     const Handle(Geom2d_Curve)& pcurve = found.curve;
     const double p0 = found.first, p1 = found.last;
@@ -236,8 +224,6 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
                       std::vector<EdgeGrid>* grids) {
   const int ne = model.edge_count();
   grids->assign(ne, EdgeGrid());
-  TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
-  TopExp::MapShapesAndAncestors(model.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
   // The first edge id of each TShape computes the parameters; the others copy them.
   std::vector<int> source(ne);
   std::unordered_map<const void*, int> first;
@@ -246,9 +232,8 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
   const ParallelRunner runner(threads);
   std::vector<double> factor(ne, 1.0);
   runner.For(1, ne + 1, [&](int e) {
-    if (const TopTools_ListOfShape* faces = edge_faces.Seek(model.edge(e)))
-      for (const TopoDS_Shape& f : *faces)
-        if (!Developable(TopoDS::Face(f))) factor[e - 1] = gc.curved_face_factor;
+    for (int f : model.edge_faces[e - 1])
+      if (!Developable(model.face(f))) factor[e - 1] = gc.curved_face_factor;
   });
   for (int e = 1; e <= ne; ++e)
     factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
@@ -278,7 +263,7 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
           // deviation. A gap at or above the deviation leaves nothing: the face cannot meet it
           // (face_mesher.cpp reports the B-rep), and the grid keeps its budget.
           const double ignored = kGapIgnored * gc.max_deviation;
-          const TopTools_ListOfShape* faces = edge_faces.Seek(model.edge(e));
+          const std::vector<int>& faces = model.edge_faces[e - 1];
           const double gap =
               ignored > 0 ? EdgeFaceGap(model, pcurves, edge, *curve, f, l, faces, ignored) : 0;
           if (gap > ignored && gap < gc.max_deviation)

@@ -2,7 +2,6 @@
 
 #include <BRep_Tool.hxx>
 #include <Standard_Failure.hxx>
-#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <map>
 #include <set>
@@ -60,8 +59,7 @@ Status HealEdgeGrids(const Model& model, const FacePcurves& pcurves, const std::
   // Per face, the TShapes of its edges: after a round, only faces on a split edge are checked.
   std::vector<std::vector<const void*>> face_tshapes(faces.size());
   for (size_t i = 0; i < faces.size(); ++i)
-    for (TopExp_Explorer ex(model.face(faces[i]), TopAbs_EDGE); ex.More(); ex.Next())
-      face_tshapes[i].push_back(ex.Current().TShape().get());
+    for (int e : model.face_edges[faces[i] - 1]) face_tshapes[i].push_back(tshape[e - 1]);
   std::vector<int> todo(faces.size());  // indices into `faces`
   for (size_t i = 0; i < faces.size(); ++i) todo[i] = static_cast<int>(i);
   const ParallelRunner runner(threads);

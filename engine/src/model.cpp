@@ -5,8 +5,10 @@
 #include <GProp_GProps.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopTools_DataMapOfShapeInteger.hxx>
 #include <TopoDS.hxx>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -124,6 +126,22 @@ std::string InnermostReason(const std::string& message) {
   return last;
 }
 
+// Model::face_edges and Model::edge_faces.
+void MapAdjacency(Model* model) {
+  const int nf = model->face_count();
+  model->face_edges.assign(nf, {});
+  model->edge_faces.assign(model->edge_count(), {});
+  for (int f = 1; f <= nf; ++f) {
+    std::vector<int>& edges = model->face_edges[f - 1];
+    for (TopExp_Explorer ex(model->face(f), TopAbs_EDGE); ex.More(); ex.Next()) {
+      const int e = model->edges.FindIndex(ex.Current());
+      if (e == 0 || std::find(edges.begin(), edges.end(), e) != edges.end()) continue;
+      edges.push_back(e);
+      model->edge_faces[e - 1].push_back(f);
+    }
+  }
+}
+
 }  // namespace
 
 Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat format,
@@ -139,6 +157,7 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
     TopExp::MapShapes(model->shape, TopAbs_VERTEX, model->vertices);
     if (model->faces.IsEmpty())
       return Status(StatusCode::kEmptyModel, "'" + name + "' holds no faces");
+    MapAdjacency(model.get());
     FindInstances(model.get());
     if (derived != nullptr &&
         derived->face_area.size() != static_cast<std::size_t>(model->face_count())) {

@@ -35,6 +35,12 @@ class Model {
   TopTools_IndexedMapOfShape edges;
   TopTools_IndexedMapOfShape vertices;
 
+  /// Adjacency, as plain id lists. Per face id - 1: its edge ids, each once, in the order a
+  /// TopExp_Explorer first meets them; per edge id - 1: the ids of the faces it bounds, each
+  /// once, ascending (the order of TopExp::MapShapesAndAncestors).
+  std::vector<std::vector<int>> face_edges;
+  std::vector<std::vector<int>> edge_faces;
+
   /// Per face id - 1: the face id that is meshed for it. A face whose TShape already appeared
   /// under another location (an instanced part) points at that first occurrence; others point
   /// at themselves.

@@ -1,7 +1,5 @@
 #include "pipeline.h"
 
-#include <TopExp_Explorer.hxx>
-#include <TopoDS.hxx>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -83,10 +81,7 @@ Result<Selection> SelectFaces(const Model& model, const MeshOptions& options) {
   sel.edge_needed.assign(model.edge_count(), false);
   for (int f = 1; f <= nf; ++f) {
     if (!sel.wanted[f - 1] && !sel.mesh_it[f - 1]) continue;
-    for (TopExp_Explorer ex(model.face(f), TopAbs_EDGE); ex.More(); ex.Next()) {
-      int e = model.edges.FindIndex(ex.Current());
-      if (e > 0) sel.edge_needed[e - 1] = true;
-    }
+    for (int e : model.face_edges[f - 1]) sel.edge_needed[e - 1] = true;
   }
   for (int f = 1; f <= nf; ++f)
     if (sel.mesh_it[f - 1]) sel.todo.push_back(f);
