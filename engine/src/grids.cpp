@@ -132,14 +132,14 @@ std::vector<double> NarrowFaceLimits(const Model& model, const GridCriteria& gc,
 
 // The faces beside an edge whose limit is below `max_sagitta`, as EdgeGrid sides: each holds
 // its own surface evaluator and pcurve (one thread uses them).
-std::vector<EdgeSide> NarrowSides(const Model& model, const FacePcurves& pcurves,
+std::vector<EdgeSide> NarrowSides(const Model& model, const FacePcurves& pcurves, int edge_id,
                                   const TopoDS_Edge& edge, const std::vector<int>& faces,
                                   const std::vector<double>& limit, double max_sagitta) {
   std::vector<EdgeSide> sides;
   for (int f : faces) {
     if (!(limit[f - 1] < max_sagitta)) continue;
     const TopoDS_Face& face = model.face(f);
-    Handle(Geom2d_Curve) pcurve = pcurves.Find(model, f, face, edge).curve;
+    Handle(Geom2d_Curve) pcurve = pcurves.Find(model, f, face, edge_id, edge).curve;
     if (pcurve.IsNull()) continue;
     std::shared_ptr<Surface> surface = MakeFaceSurface(face, false, pcurves.Bounds(model, f));
     sides.push_back({[surface, pcurve](double t) {
@@ -197,13 +197,14 @@ double FaceGap(const Adaptor3d_Surface& surface, const Geom2d_Curve& pcurve, dou
 
 // The largest FaceGap over the edge's faces that have a pcurve: a first look at kGapSamples
 // steps, and on a face where that finds more than `ignored`, a finer one.
-double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, const TopoDS_Edge& edge,
+double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, int edge_id,
+                   const TopoDS_Edge& edge,
                    Curve& curve, double first, double last, const std::vector<int>& faces,
                    double ignored) {
   double gap = 0;
   for (int f : faces) {
     const TopoDS_Face& face = model.face(f);
-    const Pcurve found = pcurves.Find(model, f, face, edge);
+    const Pcurve found = pcurves.Find(model, f, face, edge_id, edge);
     const Handle(Geom2d_Curve)& pcurve = found.curve;
     const double p0 = found.first, p1 = found.last;
     if (pcurve.IsNull()) continue;
@@ -265,7 +266,7 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
           const double ignored = kGapIgnored * gc.max_deviation;
           const std::vector<int>& faces = model.edge_faces[e - 1];
           const double gap =
-              ignored > 0 ? EdgeFaceGap(model, pcurves, edge, *curve, f, l, faces, ignored) : 0;
+              ignored > 0 ? EdgeFaceGap(model, pcurves, e, edge, *curve, f, l, faces, ignored) : 0;
           if (gap > ignored && gap < gc.max_deviation)
             c.max_sagitta = std::min(
                 c.max_sagitta, std::max(gc.max_deviation - gap, kMinChordShare * gc.max_deviation));
@@ -277,7 +278,7 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
           Vec3 start = curve->Point(f), end = curve->Point(l), mid = curve->Point(0.5 * (f + l));
           bool loops = g.first_vertex == g.last_vertex || Dist(start, end) < 0.5 * Dist(start, mid);
           c.min_segments = loops ? 3 : 1;
-          c.sides = NarrowSides(model, pcurves, edge, faces, narrow, c.max_sagitta);
+          c.sides = NarrowSides(model, pcurves, e, edge, faces, narrow, c.max_sagitta);
           g.t = DiscretizeCurve(*curve, f, l, c, context);
           // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
           // and faces see it as a pole segment (its pcurve may still span the face).

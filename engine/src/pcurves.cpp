@@ -100,12 +100,13 @@ Status WireEdges(const TopoDS_Face& face, const TopoDS_Wire& wire,
   return Status::Ok();
 }
 
-// The loops of `face` (FORWARD, face id `face_id`), its edges' pcurves from `pcurve`.
-FaceLoops LoopsOf(const Model& model, const TopoDS_Face& face,
-                  const std::function<UvBounds()>& bounds,
-                  const std::function<Pcurve(const TopoDS_Edge&)>& pcurve) {
+// The loops of `face` (FORWARD), its edges' ids from `id` and pcurves from `pcurve`.
+FaceLoops LoopsOf(const TopoDS_Face& face, const std::function<UvBounds()>& bounds,
+                  const std::function<int(const TopoDS_Edge&)>& id,
+                  const std::function<Pcurve(int, const TopoDS_Edge&)>& pcurve) {
   FaceLoops loops;
-  const Handle(Geom_Surface)& geom = BRep_Tool::Surface(face);
+  TopLoc_Location location;  // periods do not depend on where the surface is placed
+  const Handle(Geom_Surface)& geom = BRep_Tool::Surface(face, location);
   loops.period_u = !geom.IsNull() && geom->IsUPeriodic() ? geom->UPeriod() : 0.0;
   loops.period_v = !geom.IsNull() && geom->IsVPeriodic() ? geom->VPeriod() : 0.0;
   std::vector<TopoDS_Edge> edges;
@@ -114,51 +115,113 @@ FaceLoops LoopsOf(const Model& model, const TopoDS_Face& face,
     wire.reached = WireEdges(face, TopoDS::Wire(wexp.Current()), bounds, &edges);
     for (const TopoDS_Edge& e : edges) {
       WireEdge& w = wire.edges.emplace_back();
-      w.eid = model.edges.FindIndex(e);
+      w.eid = id(e);
       w.reversed = e.Orientation() == TopAbs_REVERSED;
-      if (w.eid != 0) w.pcurve = pcurve(e).curve;
+      if (w.eid != 0) w.pcurve = pcurve(w.eid, e).curve;
     }
   }
   return loops;
 }
 
+// A face's own frame: the face without its placement when that is a rigid motion, so that
+// OCCT's lookups, which work in the surface's frame anyway, need not walk the placement's chain
+// of locations (shared by every face of an instance, and by both threads). The same answers:
+// an edge's pcurve is found, or its curve projected, relative to the surface's placement.
+bool RigidlyPlaced(const TopoDS_Face& face) {
+  const TopLoc_Location& location = face.Location();
+  return location.IsIdentity() || location.Transformation().ScaleFactor() == 1.0;
+}
+
+TopoDS_Face InOwnFrame(const TopoDS_Face& face) {
+  if (face.Location().IsIdentity() || !RigidlyPlaced(face)) return face;
+  return TopoDS::Face(face.Located(TopLoc_Location()));
+}
+
 }  // namespace
+
+void FacePcurves::BuildFace(const Model& model, int f, Face* out) {
+  try {
+    const TopoDS_Face face = InOwnFrame(TopoDS::Face(model.face(f).Oriented(TopAbs_FORWARD)));
+    out->bounds = BoundsFromOcct(face);
+    // The face's distinct edges come in the order of Model::face_edges.
+    const std::vector<int>& ids = model.face_edges[f - 1];
+    std::vector<TopoDS_Edge> distinct;
+    auto id = [&](const TopoDS_Edge& edge) {
+      for (size_t k = 0; k < distinct.size(); ++k)
+        if (distinct[k].IsSame(edge)) return ids[k];
+      return 0;
+    };
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+      int eid = id(edge);
+      if (eid == 0) {
+        if (distinct.size() >= ids.size()) throw Standard_Failure("edges differ");
+        distinct.push_back(edge);
+        eid = ids[distinct.size() - 1];
+      }
+      // Only a seam's pcurve depends on the edge's orientation.
+      const bool second = SecondSide(face, edge);
+      const bool either = !BRep_Tool::IsClosed(edge, face);
+      bool known = false;
+      for (const Entry& e : out->entries) known = known || (e.eid == eid && e.second == second);
+      if (!known) out->entries.push_back({eid, second, either, FromOcct(face, edge)});
+    }
+    if (distinct.size() != ids.size()) throw Standard_Failure("edges differ");
+    out->loops = LoopsOf(
+        face, [&] { return out->bounds; }, id,
+        [&](int eid, const TopoDS_Edge& edge) {
+          const bool second = SecondSide(face, edge);
+          for (const Entry& e : out->entries)
+            if (e.eid == eid && (e.either || e.second == second)) return e.pcurve;
+          return FromOcct(face, edge);
+        });
+    out->built = true;
+  } catch (const Standard_Failure&) {
+    *out = Face();  // looked up from OCCT at every call, which fails the same way
+  }
+}
 
 FacePcurves FacePcurves::Build(const Model& model, const std::vector<int>& faces, int threads,
                                Context* context) {
   FacePcurves table;
-  table.faces_.resize(model.face_count());
+  const int nf = model.face_count();
+  table.faces_.resize(nf);
+  // An instanced copy, rigidly placed like its representative, is the same face in its own
+  // frame: it takes the representative's answers, under its own edge ids.
+  std::vector<bool> asked(nf, false);
+  for (int f : faces) asked[f - 1] = true;
+  std::vector<int> sources, copies;
+  for (int f : faces) {
+    const int rep = model.face_representative[f - 1];
+    const bool copy = rep != f && asked[rep - 1] && RigidlyPlaced(model.face(f)) &&
+                      RigidlyPlaced(model.face(rep)) &&
+                      model.face_edges[f - 1].size() == model.face_edges[rep - 1].size();
+    (copy ? copies : sources).push_back(f);
+  }
   const ParallelRunner runner(threads);
   runner.For(
-      0, static_cast<int>(faces.size()),
+      0, static_cast<int>(sources.size()),
       [&](int i) {
         if (context && context->ShouldStop()) return;
-        Face& out = table.faces_[faces[i] - 1];
-        try {
-          const TopoDS_Face face = TopoDS::Face(model.face(faces[i]).Oriented(TopAbs_FORWARD));
-          out.bounds = BoundsFromOcct(face);
-          for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
-            const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
-            bool known = false;
-            for (const Entry& e : out.entries)
-              known = known ||
-                      (e.edge.IsSame(edge) && SecondSide(face, e.edge) == SecondSide(face, edge));
-            if (!known) out.entries.push_back({edge, FromOcct(face, edge)});
-          }
-          out.loops = LoopsOf(
-              model, face, [&] { return out.bounds; },
-              [&](const TopoDS_Edge& edge) {
-                const bool second = SecondSide(face, edge);
-                for (const Entry& e : out.entries)
-                  if (e.edge.IsSame(edge) && SecondSide(face, e.edge) == second) return e.pcurve;
-                return FromOcct(face, edge);
-              });
-          out.built = true;
-        } catch (const Standard_Failure&) {
-          out = Face();  // looked up from OCCT at every call, which fails the same way
-        }
+        BuildFace(model, sources[i], &table.faces_[sources[i] - 1]);
       },
       Partition::kOnePerTask);
+  runner.For(0, static_cast<int>(copies.size()), [&](int i) {
+    if (context && context->ShouldStop()) return;
+    const int f = copies[i], rep = model.face_representative[f - 1];
+    Face& out = table.faces_[f - 1];
+    out = table.faces_[rep - 1];
+    if (!out.built) return;  // left to OCCT, as the representative is
+    const std::vector<int>&from = model.face_edges[rep - 1], &to = model.face_edges[f - 1];
+    auto id = [&](int eid) {
+      for (size_t k = 0; k < from.size(); ++k)
+        if (from[k] == eid) return to[k];
+      return 0;
+    };
+    for (Entry& e : out.entries) e.eid = id(e.eid);
+    for (FaceWire& wire : out.loops.wires)
+      for (WireEdge& e : wire.edges) e.eid = id(e.eid);
+  });
   return table;
 }
 
@@ -168,14 +231,12 @@ const FacePcurves::Face* FacePcurves::Built(int face_id) const {
   return f.built ? &f : nullptr;
 }
 
-Pcurve FacePcurves::Find(const Model& model, int face_id, const TopoDS_Face& face,
+Pcurve FacePcurves::Find(const Model& model, int face_id, const TopoDS_Face& face, int edge_id,
                          const TopoDS_Edge& edge) const {
-  const Face* f = Built(face_id);
-  if (f && face.IsSame(model.face(face_id))) {
+  if (const Face* f = Built(face_id)) {
     const bool second = SecondSide(face, edge);
     for (const Entry& e : f->entries)
-      if (e.edge.IsSame(edge) && (e.edge.Orientation() == TopAbs_REVERSED) == second)
-        return e.pcurve;
+      if (e.eid == edge_id && (e.either || e.second == second)) return e.pcurve;
   }
   return FromOcct(face, edge);
 }
@@ -189,8 +250,9 @@ const FaceLoops& FacePcurves::Loops(const Model& model, int face_id, FaceLoops* 
   if (const Face* f = Built(face_id)) return f->loops;
   const TopoDS_Face face = TopoDS::Face(model.face(face_id).Oriented(TopAbs_FORWARD));
   *scratch = LoopsOf(
-      model, face, [&] { return BoundsFromOcct(face); },
-      [&](const TopoDS_Edge& edge) { return FromOcct(face, edge); });
+      face, [&] { return BoundsFromOcct(face); },
+      [&](const TopoDS_Edge& edge) { return model.edges.FindIndex(edge); },
+      [&](int, const TopoDS_Edge& edge) { return FromOcct(face, edge); });
   return *scratch;
 }
 

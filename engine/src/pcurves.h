@@ -65,8 +65,9 @@ class FacePcurves {
                            Context* context);
 
   /// BRep_Tool::CurveOnSurface(edge, face): `face` is model.face(face_id) in any orientation,
-  /// `edge` one of its edges (the orientation picks a seam's side, as in OCCT).
-  Pcurve Find(const Model& model, int face_id, const TopoDS_Face& face,
+  /// `edge` is model.edge(edge_id) in any orientation, one of the face's edges (the orientation
+  /// picks a seam's side, as in OCCT).
+  Pcurve Find(const Model& model, int face_id, const TopoDS_Face& face, int edge_id,
               const TopoDS_Edge& edge) const;
 
   /// BRepTools::UVBounds of face `face_id`.
@@ -78,7 +79,9 @@ class FacePcurves {
 
  private:
   struct Entry {
-    TopoDS_Edge edge;  // as the FORWARD face holds it
+    int eid = 0;
+    bool second = false;  // a seam's second pcurve (the edge REVERSED in the FORWARD face)
+    bool either = false;  // not a seam: the pcurve for both orientations
     Pcurve pcurve;
   };
   struct Face {
@@ -88,6 +91,7 @@ class FacePcurves {
     FaceLoops loops;
   };
   const Face* Built(int face_id) const;
+  static void BuildFace(const Model& model, int face_id, Face* out);
 
   std::vector<Face> faces_;  // per face id - 1
 };

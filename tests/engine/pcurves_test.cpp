@@ -22,6 +22,7 @@
 #include <gp_Ax2.hxx>
 #include <gp_Circ.hxx>
 #include <gp_Pln.hxx>
+#include <gp_Trsf.hxx>
 #include <vector>
 
 #include "domain_fixture.h"
@@ -66,7 +67,7 @@ int ExpectSameAsOcct(const Model& model, const FacePcurves& table) {
           Standard_Boolean stored = Standard_True;
           Handle(Geom2d_Curve) occt = BRep_Tool::CurveOnSurface(edge, face, first, last, &stored);
           projected += !stored;
-          const Pcurve ours = table.Find(model, f, face, edge);
+          const Pcurve ours = table.Find(model, f, face, model.edges.FindIndex(edge), edge);
           if (occt.IsNull() || ours.curve.IsNull()) {
             ADD_FAILURE() << "face " << f << ": a null pcurve";
             continue;
@@ -83,43 +84,6 @@ int ExpectSameAsOcct(const Model& model, const FacePcurves& table) {
     }
   }
   return projected;
-}
-
-TEST(FacePcurvesTest, AnswersAsOcctOnSeamsAndOnPlanesWithoutStoredPcurves) {
-  auto model = LoadShape(CylinderAndHoledPlane(), "pcurves");
-  ASSERT_TRUE(model);
-  const FacePcurves table = testing::Pcurves(*model);
-  EXPECT_GT(ExpectSameAsOcct(*model, table), 0) << "no projected pcurve was compared";
-  // The cylinder's side: the seam's two pcurves lie a period apart in u.
-  bool seam_seen = false;
-  for (int f = 1; f <= model->face_count(); ++f) {
-    const TopoDS_Face& face = model->face(f);
-    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
-      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
-      if (!BRep_Tool::IsClosed(edge, face)) continue;
-      const Pcurve a = table.Find(*model, f, face, edge);
-      const Pcurve b = table.Find(*model, f, face, TopoDS::Edge(edge.Reversed()));
-      EXPECT_NEAR(std::fabs(a.curve->Value(a.first).X() - b.curve->Value(b.first).X()), 2 * M_PI,
-                  1e-12);
-      seam_seen = true;
-    }
-  }
-  EXPECT_TRUE(seam_seen);
-}
-
-TEST(FacePcurvesTest, BoundsAreOccts) {
-  auto model = LoadShape(CylinderAndHoledPlane(), "pcurves_bounds");
-  ASSERT_TRUE(model);
-  const FacePcurves table = testing::Pcurves(*model);
-  for (int f = 1; f <= model->face_count(); ++f) {
-    double u0, u1, v0, v1;
-    BRepTools::UVBounds(model->face(f), u0, u1, v0, v1);
-    const UvBounds b = table.Bounds(*model, f);
-    EXPECT_EQ(b.umin, u0);
-    EXPECT_EQ(b.umax, u1);
-    EXPECT_EQ(b.vmin, v0);
-    EXPECT_EQ(b.vmax, v1);
-  }
 }
 
 // Every wire of every face as BRepTools_WireExplorer walks it: (edge id, reversed) in order.
@@ -148,6 +112,72 @@ void ExpectLoopsAsTheExplorerWalks(const Model& model, const FacePcurves& table)
       EXPECT_EQ(k, wire.edges.size()) << "face " << f << " wire " << w;
     }
     EXPECT_EQ(w, loops.wires.size()) << "face " << f;
+  }
+}
+
+TEST(FacePcurvesTest, AnswersAsOcctOnSeamsAndOnPlanesWithoutStoredPcurves) {
+  auto model = LoadShape(CylinderAndHoledPlane(), "pcurves");
+  ASSERT_TRUE(model);
+  const FacePcurves table = testing::Pcurves(*model);
+  EXPECT_GT(ExpectSameAsOcct(*model, table), 0) << "no projected pcurve was compared";
+  // The cylinder's side: the seam's two pcurves lie a period apart in u.
+  bool seam_seen = false;
+  for (int f = 1; f <= model->face_count(); ++f) {
+    const TopoDS_Face& face = model->face(f);
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+      if (!BRep_Tool::IsClosed(edge, face)) continue;
+      const int e = model->edges.FindIndex(edge);
+      const Pcurve a = table.Find(*model, f, face, e, edge);
+      const Pcurve b = table.Find(*model, f, face, e, TopoDS::Edge(edge.Reversed()));
+      EXPECT_NEAR(std::fabs(a.curve->Value(a.first).X() - b.curve->Value(b.first).X()), 2 * M_PI,
+                  1e-12);
+      seam_seen = true;
+    }
+  }
+  EXPECT_TRUE(seam_seen);
+}
+
+// The shape and a placed copy of it (an instance: its faces share their TShapes and carry a
+// location, which the table looks through).
+TEST(FacePcurvesTest, APlacedCopyAnswersAsOcct) {
+  gp_Trsf trsf;
+  trsf.SetRotation(gp_Ax1(gp_Pnt(1, 2, 3), gp_Dir(1, 1, 0)), 0.7);
+  trsf.SetTranslationPart(gp_Vec(10, -4, 2));
+  BRep_Builder builder;
+  TopoDS_Compound compound;
+  builder.MakeCompound(compound);
+  const TopoDS_Shape shape = CylinderAndHoledPlane();
+  builder.Add(compound, shape);
+  builder.Add(compound, shape.Moved(TopLoc_Location(trsf)));
+  auto model = LoadShape(compound, "pcurves_placed");
+  ASSERT_TRUE(model);
+  int located = 0;
+  for (int f = 1; f <= model->face_count(); ++f) located += !model->face(f).Location().IsIdentity();
+  EXPECT_GE(located, model->face_count() / 2);
+  const FacePcurves table = testing::Pcurves(*model);
+  EXPECT_GT(ExpectSameAsOcct(*model, table), 0);
+  ExpectLoopsAsTheExplorerWalks(*model, table);
+  for (int f = 1; f <= model->face_count(); ++f) {
+    double u0, u1, v0, v1;
+    BRepTools::UVBounds(model->face(f), u0, u1, v0, v1);
+    EXPECT_EQ(table.Bounds(*model, f).umin, u0);
+    EXPECT_EQ(table.Bounds(*model, f).vmax, v1);
+  }
+}
+
+TEST(FacePcurvesTest, BoundsAreOccts) {
+  auto model = LoadShape(CylinderAndHoledPlane(), "pcurves_bounds");
+  ASSERT_TRUE(model);
+  const FacePcurves table = testing::Pcurves(*model);
+  for (int f = 1; f <= model->face_count(); ++f) {
+    double u0, u1, v0, v1;
+    BRepTools::UVBounds(model->face(f), u0, u1, v0, v1);
+    const UvBounds b = table.Bounds(*model, f);
+    EXPECT_EQ(b.umin, u0);
+    EXPECT_EQ(b.umax, u1);
+    EXPECT_EQ(b.vmin, v0);
+    EXPECT_EQ(b.vmax, v1);
   }
 }
 
