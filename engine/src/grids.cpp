@@ -98,8 +98,8 @@ void MergeCollapsedEdgeVertices(const Model& model, std::vector<EdgeGrid>* grids
 // narrow_face_fraction x area / perimeter (seams and degenerate edges are no boundary), or
 // infinity where that is no tighter than the deviation (which bounds the whole sagitta) or
 // where the face is narrower than the deviation.
-std::vector<double> NarrowFaceLimits(const Model& model, const GridCriteria& gc,
-                                     const ParallelRunner& runner) {
+std::vector<double> NarrowFaceLimits(const Model& model, const FacePcurves& pcurves,
+                                     const GridCriteria& gc, const ParallelRunner& runner) {
   const int nf = model.face_count(), ne = model.edge_count();
   std::vector<double> limit(nf, INFINITY);
   if (!(gc.max_deviation > 0) || !(gc.narrow_face_fraction > 0)) return limit;
@@ -119,9 +119,13 @@ std::vector<double> NarrowFaceLimits(const Model& model, const GridCriteria& gc,
   runner.For(1, nf + 1, [&](int f) {
     const TopoDS_Face& face = model.face(f);
     double area = model.face_area[f - 1], perimeter = 0;
-    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
-      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
-      if (!BRep_Tool::IsClosed(edge, face)) perimeter += length[model.edges.FindIndex(edge) - 1];
+    if (const std::vector<int>* rim = pcurves.Rim(f)) {
+      for (int e : *rim) perimeter += length[e - 1];
+    } else {
+      for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+        const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+        if (!BRep_Tool::IsClosed(edge, face)) perimeter += length[model.edges.FindIndex(edge) - 1];
+      }
     }
     // Narrower than the deviation, a face is not resolved at all: it may stand as a line.
     if (perimeter > 0 && area / perimeter < width && area / perimeter >= gc.max_deviation)
@@ -198,9 +202,8 @@ double FaceGap(const Adaptor3d_Surface& surface, const Geom2d_Curve& pcurve, dou
 // The largest FaceGap over the edge's faces that have a pcurve: a first look at kGapSamples
 // steps, and on a face where that finds more than `ignored`, a finer one.
 double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, int edge_id,
-                   const TopoDS_Edge& edge,
-                   Curve& curve, double first, double last, const std::vector<int>& faces,
-                   double ignored) {
+                   const TopoDS_Edge& edge, Curve& curve, double first, double last,
+                   const std::vector<int>& faces, double ignored) {
   double gap = 0;
   for (int f : faces) {
     const TopoDS_Face& face = model.face(f);
@@ -239,7 +242,7 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
   for (int e = 1; e <= ne; ++e)
     factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
 
-  const std::vector<double> narrow = NarrowFaceLimits(model, gc, runner);
+  const std::vector<double> narrow = NarrowFaceLimits(model, pcurves, gc, runner);
 
   auto build = [&](int e, bool params) {
     if (!edge_needed.empty() && !edge_needed[e - 1] && !params) return;

@@ -162,6 +162,7 @@ void FacePcurves::BuildFace(const Model& model, int f, Face* out) {
       // Only a seam's pcurve depends on the edge's orientation.
       const bool second = SecondSide(face, edge);
       const bool either = !BRep_Tool::IsClosed(edge, face);
+      if (either) out->rim.push_back(eid);
       bool known = false;
       for (const Entry& e : out->entries) known = known || (e.eid == eid && e.second == second);
       if (!known) out->entries.push_back({eid, second, either, FromOcct(face, edge)});
@@ -219,6 +220,7 @@ FacePcurves FacePcurves::Build(const Model& model, const std::vector<int>& faces
       return 0;
     };
     for (Entry& e : out.entries) e.eid = id(e.eid);
+    for (int& e : out.rim) e = id(e);
     for (FaceWire& wire : out.loops.wires)
       for (WireEdge& e : wire.edges) e.eid = id(e.eid);
   });
@@ -239,6 +241,11 @@ Pcurve FacePcurves::Find(const Model& model, int face_id, const TopoDS_Face& fac
       if (e.eid == edge_id && (e.either || e.second == second)) return e.pcurve;
   }
   return FromOcct(face, edge);
+}
+
+const std::vector<int>* FacePcurves::Rim(int face_id) const {
+  const Face* f = Built(face_id);
+  return f ? &f->rim : nullptr;
 }
 
 UvBounds FacePcurves::Bounds(const Model& model, int face_id) const {

@@ -73,6 +73,10 @@ class FacePcurves {
   /// BRepTools::UVBounds of face `face_id`.
   UvBounds Bounds(const Model& model, int face_id) const;
 
+  /// The ids of face `face_id`'s edges, each time a TopExp_Explorer meets one, seams left out
+  /// (they are no boundary); null for a face the table was not built for.
+  const std::vector<int>* Rim(int face_id) const;
+
   /// The loops of face `face_id`: the table's, or for a face it was not built for, looked up
   /// from OCCT into `scratch` (with OCCT's exceptions).
   const FaceLoops& Loops(const Model& model, int face_id, FaceLoops* scratch) const;
@@ -88,6 +92,7 @@ class FacePcurves {
     bool built = false;
     UvBounds bounds;
     std::vector<Entry> entries;
+    std::vector<int> rim;
     FaceLoops loops;
   };
   const Face* Built(int face_id) const;
