@@ -227,6 +227,12 @@ FacePcurves FacePcurves::Build(const Model& model, const std::vector<int>& faces
   return table;
 }
 
+void FacePcurves::Release(int threads) {
+  const ParallelRunner runner(threads);
+  runner.For(0, static_cast<int>(faces_.size()), [&](int i) { faces_[i] = Face(); });
+  faces_.clear();
+}
+
 const FacePcurves::Face* FacePcurves::Built(int face_id) const {
   if (face_id < 1 || face_id > static_cast<int>(faces_.size())) return nullptr;
   const Face& f = faces_[face_id - 1];

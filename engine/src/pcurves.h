@@ -64,6 +64,10 @@ class FacePcurves {
   static FacePcurves Build(const Model& model, const std::vector<int>& faces, int threads,
                            Context* context);
 
+  /// Lets go of everything, on up to `threads` threads (the table holds a handle per pcurve,
+  /// and a run's last stages need none of them).
+  void Release(int threads);
+
   /// BRep_Tool::CurveOnSurface(edge, face): `face` is model.face(face_id) in any orientation,
   /// `edge` is model.edge(edge_id) in any orientation, one of the face's edges (the orientation
   /// picks a seam's side, as in OCCT).

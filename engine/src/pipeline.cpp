@@ -198,7 +198,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   std::vector<int> faces;
   for (int f = 1; f <= model.face_count(); ++f)
     if (sel->wanted[f - 1] || sel->mesh_it[f - 1]) faces.push_back(f);
-  const FacePcurves pcurves = FacePcurves::Build(model, faces, options.threads, context);
+  FacePcurves pcurves = FacePcurves::Build(model, faces, options.threads, context);
   if (Stopped(context)) return context->StopStatus();
 
   std::vector<EdgeGrid> grids;
@@ -221,6 +221,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
                       &result.faces, &refs);
   if (!st.ok()) return st;
   result.summary.face_seconds = Since(t1);
+  pcurves.Release(options.threads);
 
   // 7. Assemble, in face order.
   if (context) context->ReportProgress({Progress::Stage::kAssembly, total, total});
