@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "model.h"
+#include "pcurves.h"
 #include "rdmesh/engine.h"
 
 namespace rdmesh {
@@ -36,7 +37,8 @@ class FaceNormalOnEdge {
   FaceNormalOnEdge(const TopoDS_Face& face, const TopoDS_Edge& edge) {
     try {
       double first, last;
-      pcurve_ = BRep_Tool::CurveOnSurface(edge, face, first, last);
+      const auto [own_face, own_edge] = InOwnFrame(face, edge);
+      pcurve_ = BRep_Tool::CurveOnSurface(own_edge, own_face, first, last);
       // The bare surface: an adaptor would first compute the face's (u,v) bounds.
       surface_ = BRep_Tool::Surface(face, location_);
       reversed_ = face.Orientation() == TopAbs_REVERSED;
@@ -153,7 +155,8 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
       for (int f : model.edge_faces[e - 1]) {  // each once, ascending
         line.faces.push_back(f);
         any_meshed = any_meshed || meshed[f];
-        line.seam = line.seam || BRep_Tool::IsClosed(edge, model.face(f));
+        const auto [own_face, own_edge] = InOwnFrame(model.face(f), edge);
+        line.seam = line.seam || BRep_Tool::IsClosed(own_edge, own_face);
       }
       if (!any_meshed) continue;
 

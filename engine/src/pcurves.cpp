@@ -233,6 +233,14 @@ void FacePcurves::Release(int threads) {
   faces_.clear();
 }
 
+std::pair<TopoDS_Face, TopoDS_Edge> InOwnFrame(const TopoDS_Face& face, const TopoDS_Edge& edge) {
+  if (face.Location().IsIdentity() || !RigidlyPlaced(face) ||
+      !edge.Location().IsEqual(face.Location()))
+    return {face, edge};
+  return {TopoDS::Face(face.Located(TopLoc_Location())),
+          TopoDS::Edge(edge.Located(TopLoc_Location()))};
+}
+
 const FacePcurves::Face* FacePcurves::Built(int face_id) const {
   if (face_id < 1 || face_id > static_cast<int>(faces_.size())) return nullptr;
   const Face& f = faces_[face_id - 1];

@@ -12,6 +12,7 @@
 #include <Standard_Handle.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <utility>
 #include <vector>
 
 #include "rdmesh/context.h"
@@ -51,6 +52,12 @@ struct FaceLoops {
   std::vector<FaceWire> wires;
   double period_u = 0, period_v = 0;
 };
+
+/// `face` and `edge` without the face's placement, when that is a rigid motion and the edge shares
+/// it: OCCT's answers about the edge on the face (its pcurve, whether it is a seam) are the same
+/// there, since OCCT works in the surface's frame, but it need not walk the placement's chain of
+/// locations to get there. Otherwise the two as they are.
+std::pair<TopoDS_Face, TopoDS_Edge> InOwnFrame(const TopoDS_Face& face, const TopoDS_Edge& edge);
 
 /// What faces a run works on know of their pcurves. Read-only once built, from any thread. A
 /// face it was not built for, or one OCCT failed on while it was built, is looked up from OCCT
