@@ -77,6 +77,15 @@ def last_json(text):
     return None
 
 
+def allocator(binary):
+    """The malloc a program is linked with: "tcmalloc" or glibc's (CMake's RDMESH_TCMALLOC)."""
+    try:
+        out = subprocess.run(["ldd", binary], capture_output=True, text=True).stdout
+    except OSError:
+        return "?"
+    return "tcmalloc" if "libtcmalloc" in out else "glibc"
+
+
 def sha256(path):
     h = hashlib.sha256()
     with open(path, "rb") as f:
@@ -398,7 +407,7 @@ def report(a, models, infos, summaries, records, meta):
                  f"at HEAD `{meta['head']}`; built from a clean export of it)")
     L.append(f"- rdmesh binary: `{os.path.relpath(a.rdmesh, REPO)}` (sha256 {meta['rdmesh_sha']}), `--threads {a.threads}`; "
              f"BRepMesh: OCCT {meta['occt']} via `bench/brepmesh_runner` (InParallel); Gmsh {meta['gmsh']} "
-             f"(Debian python3-gmsh {meta['gmsh_deb']}, 2 threads)")
+             f"(Debian python3-gmsh {meta['gmsh_deb']}, 2 threads); allocators: {meta.get('malloc', '?')}")
     L.append(f"- Command: `{meta['command']}`")
     times = sorted(r["measured"] for r in records if "measured" in r)
     if times:
@@ -606,7 +615,8 @@ def main():
     except OSError:
         pass
     tools = {"rdmesh": "rdmesh-" + sha256(a.rdmesh) if "rdmesh" in a.meshers else "",
-             "brepmesh": f"occt-{occt}-runner-{sha256(os.path.join(HERE, 'brepmesh_runner.cpp'))}",
+             "brepmesh": f"occt-{occt}-runner-{sha256(os.path.join(HERE, 'brepmesh_runner.cpp'))}"
+                         + ("-tcmalloc" if allocator(a.brepmesh_runner) == "tcmalloc" else ""),
              "gmsh": f"gmsh-{gmsh_version}"}
 
     names = a.models or (QUICK if a.quick else DEFAULT)
@@ -657,6 +667,7 @@ def main():
         "dirty": a.measured_rev == "working tree" and len(dirty.splitlines()) and f"{len(dirty.splitlines())} files",
         "rdmesh_sha": tools["rdmesh"].replace("rdmesh-", ""),
         "occt": occt, "gmsh": gmsh_version,
+        "malloc": f"rdmesh {allocator(a.rdmesh)}, brepmesh_runner {allocator(a.brepmesh_runner)}",
         "gmsh_deb": subprocess.run(["dpkg-query", "-W", "-f=${Version}", "python3-gmsh"], capture_output=True,
                                    text=True).stdout.strip() or "n/a",
         "command": "/usr/bin/python3 " + " ".join(shlex.quote(x) for x in
