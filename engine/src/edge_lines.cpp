@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "model.h"
+#include "parallel.h"
 #include "pcurves.h"
 #include "rdmesh/engine.h"
 
@@ -117,7 +118,7 @@ std::optional<int32_t> VertexNode(const Model& model, const Mesh& mesh,
 }  // namespace
 
 Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mesh,
-                                             double sharp_angle) {
+                                             double sharp_angle, int threads) {
   const int64_t nodes = mesh.node_count();
   if (mesh.node_dim.size() != static_cast<size_t>(nodes) ||
       mesh.node_entity.size() != static_cast<size_t>(nodes) ||
@@ -145,8 +146,10 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
   for (int32_t f : mesh.triangle_face)
     if (f >= 1 && f <= model.face_count()) meshed[f] = true;
 
-  std::vector<EdgeLine> lines;
-  for (int e = 1; e <= ne; ++e) {
+  // Each edge on its own (its slot, its own nodes), then in edge id order.
+  std::vector<std::optional<EdgeLine>> built(ne);
+  const ParallelRunner runner(threads);
+  runner.For(1, ne + 1, [&](int e) {
     try {  // an edge OCCT cannot answer for is left out, the others still get lines
       const TopoDS_Edge& edge = model.edge(e);
       EdgeLine line;
@@ -158,7 +161,7 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
         const auto [own_face, own_edge] = InOwnFrame(model.face(f), edge);
         line.seam = line.seam || BRep_Tool::IsClosed(own_edge, own_face);
       }
-      if (!any_meshed) continue;
+      if (!any_meshed) return;
 
       TopoDS_Vertex first, last;
       TopExp::Vertices(TopoDS::Edge(edge.Oriented(TopAbs_FORWARD)), first, last);
@@ -167,7 +170,7 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
                      first.IsNull() ? 0 : model.vertices.FindIndex(first));
       std::optional<int32_t> end = VertexNode(model, mesh, vertex_node, vertex_nodes,
                                               last.IsNull() ? 0 : model.vertices.FindIndex(last));
-      if (!start || !end) continue;  // a mesh without vertex nodes: nothing to anchor the line
+      if (!start || !end) return;  // a mesh without vertex nodes: nothing to anchor the line
       std::vector<std::pair<double, int32_t>>& inner = edge_nodes[e];
       std::sort(inner.begin(), inner.end());
       line.nodes.push_back(*start);
@@ -186,10 +189,13 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
       }
       const bool free = line.faces.size() == 1 && !line.seam && !line.degenerate;
       line.sharp = free || line.dihedral > sharp_angle;
-      lines.push_back(std::move(line));
+      built[e - 1] = std::move(line);
     } catch (const Standard_Failure&) {
     }
-  }
+  });
+  std::vector<EdgeLine> lines;
+  for (std::optional<EdgeLine>& line : built)
+    if (line) lines.push_back(std::move(*line));
   return lines;
 }
 

@@ -31,7 +31,7 @@ Result<MeshResult> MeshModelWith(const Model& model, const MeshOptions& options,
                                   : MeshAtDeviation(model, options, deviation, context, surfaces);
   if (!result.ok()) return result;
   Result<std::vector<EdgeLine>> edges =
-      BuildEdgeLines(model, result->mesh, options.sharp_edge_angle);
+      BuildEdgeLines(model, result->mesh, options.sharp_edge_angle, options.threads);
   if (!edges.ok()) return edges.status();
   result->edges = std::move(*edges);
   return result;

@@ -92,10 +92,12 @@ Status WriteMesh(const Model& model, const MeshResult& result, const std::string
 /// vertices have no node at all), in edge id order, built from the mesh's node
 /// classification (node_dim, node_entity, node_param), so a mesh rebuilt from a remote run gets
 /// the same lines. An edge is sharp when its dihedral angle (EdgeLine::dihedral: the
-/// largest over its nodes) exceeds `sharp_angle` (degrees). kInternal when the mesh lacks its node
-/// classification or OCCT cannot map the shape's edges to their faces.
+/// largest over its nodes) exceeds `sharp_angle` (degrees). The edges are built on up to
+/// `threads` threads (0: all cores); the lines do not depend on it. kInternal when the mesh lacks
+/// its node classification.
 Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mesh,
-                                             double sharp_angle = kDefaultSharpEdgeAngle);
+                                             double sharp_angle = kDefaultSharpEdgeAngle,
+                                             int threads = 0);
 
 /// The file extensions WriteMesh understands, with the dot.
 std::vector<std::string> SupportedOutputFormats();
