@@ -143,7 +143,7 @@ std::vector<EdgeSide> NarrowSides(const Model& model, const FacePcurves& pcurves
   for (int f : faces) {
     if (!(limit[f - 1] < max_sagitta)) continue;
     const TopoDS_Face& face = model.face(f);
-    Handle(Geom2d_Curve) pcurve = pcurves.Find(model, f, face, edge_id, edge).curve;
+    Handle(Geom2d_Curve) pcurve = pcurves.Find(f, face, edge_id, edge).curve;
     if (pcurve.IsNull()) continue;
     std::shared_ptr<Surface> surface = MakeFaceSurface(face, false, pcurves.Bounds(model, f));
     sides.push_back({[surface, pcurve](double t) {
@@ -207,7 +207,7 @@ double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, int edge_id,
   double gap = 0;
   for (int f : faces) {
     const TopoDS_Face& face = model.face(f);
-    const Pcurve found = pcurves.Find(model, f, face, edge_id, edge);
+    const Pcurve found = pcurves.Find(f, face, edge_id, edge);
     const Handle(Geom2d_Curve)& pcurve = found.curve;
     const double p0 = found.first, p1 = found.last;
     if (pcurve.IsNull()) continue;

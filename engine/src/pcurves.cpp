@@ -123,15 +123,15 @@ FaceLoops LoopsOf(const TopoDS_Face& face, const std::function<UvBounds()>& boun
   return loops;
 }
 
-// A face's own frame: the face without its placement when that is a rigid motion, so that
-// OCCT's lookups, which work in the surface's frame anyway, need not walk the placement's chain
-// of locations (shared by every face of an instance, and by both threads). The same answers:
-// an edge's pcurve is found, or its curve projected, relative to the surface's placement.
 bool RigidlyPlaced(const TopoDS_Face& face) {
   const TopLoc_Location& location = face.Location();
   return location.IsIdentity() || location.Transformation().ScaleFactor() == 1.0;
 }
 
+// A face's own frame: the face without its placement when that is a rigid motion, so that
+// OCCT's lookups, which work in the surface's frame anyway, need not walk the placement's chain
+// of locations (shared by every face of an instance, and by both threads). The same answers:
+// an edge's pcurve is found, or its curve projected, relative to the surface's placement.
 TopoDS_Face InOwnFrame(const TopoDS_Face& face) {
   if (face.Location().IsIdentity() || !RigidlyPlaced(face)) return face;
   return TopoDS::Face(face.Located(TopLoc_Location()));
@@ -163,18 +163,15 @@ void FacePcurves::BuildFace(const Model& model, int f, Face* out) {
       const bool second = SecondSide(face, edge);
       const bool either = !BRep_Tool::IsClosed(edge, face);
       if (either) out->rim.push_back(eid);
-      bool known = false;
-      for (const Entry& e : out->entries) known = known || (e.eid == eid && e.second == second);
-      if (!known) out->entries.push_back({eid, second, either, FromOcct(face, edge)});
+      if (!out->Lookup(eid, second))
+        out->entries.push_back({eid, second, either, FromOcct(face, edge)});
     }
     if (distinct.size() != ids.size()) throw Standard_Failure("edges differ");
     out->loops = LoopsOf(
         face, [&] { return out->bounds; }, id,
         [&](int eid, const TopoDS_Edge& edge) {
-          const bool second = SecondSide(face, edge);
-          for (const Entry& e : out->entries)
-            if (e.eid == eid && (e.either || e.second == second)) return e.pcurve;
-          return FromOcct(face, edge);
+          const Pcurve* known = out->Lookup(eid, SecondSide(face, edge));
+          return known ? *known : FromOcct(face, edge);
         });
     out->built = true;
   } catch (const Standard_Failure&) {
@@ -247,13 +244,16 @@ const FacePcurves::Face* FacePcurves::Built(int face_id) const {
   return f.built ? &f : nullptr;
 }
 
-Pcurve FacePcurves::Find(const Model& model, int face_id, const TopoDS_Face& face, int edge_id,
+const Pcurve* FacePcurves::Face::Lookup(int eid, bool second) const {
+  for (const Entry& e : entries)
+    if (e.eid == eid && (e.either || e.second == second)) return &e.pcurve;
+  return nullptr;
+}
+
+Pcurve FacePcurves::Find(int face_id, const TopoDS_Face& face, int edge_id,
                          const TopoDS_Edge& edge) const {
-  if (const Face* f = Built(face_id)) {
-    const bool second = SecondSide(face, edge);
-    for (const Entry& e : f->entries)
-      if (e.eid == edge_id && (e.either || e.second == second)) return e.pcurve;
-  }
+  if (const Face* f = Built(face_id))
+    if (const Pcurve* known = f->Lookup(edge_id, SecondSide(face, edge))) return *known;
   return FromOcct(face, edge);
 }
 

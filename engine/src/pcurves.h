@@ -78,8 +78,7 @@ class FacePcurves {
   /// BRep_Tool::CurveOnSurface(edge, face): `face` is model.face(face_id) in any orientation,
   /// `edge` is model.edge(edge_id) in any orientation, one of the face's edges (the orientation
   /// picks a seam's side, as in OCCT).
-  Pcurve Find(const Model& model, int face_id, const TopoDS_Face& face, int edge_id,
-              const TopoDS_Edge& edge) const;
+  Pcurve Find(int face_id, const TopoDS_Face& face, int edge_id, const TopoDS_Edge& edge) const;
 
   /// BRepTools::UVBounds of face `face_id`.
   UvBounds Bounds(const Model& model, int face_id) const;
@@ -105,6 +104,8 @@ class FacePcurves {
     std::vector<Entry> entries;
     std::vector<int> rim;
     FaceLoops loops;
+    // The entry for edge `eid` on the side `second`; null when there is none.
+    const Pcurve* Lookup(int eid, bool second) const;
   };
   const Face* Built(int face_id) const;
   static void BuildFace(const Model& model, int face_id, Face* out);

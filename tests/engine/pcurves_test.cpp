@@ -67,7 +67,7 @@ int ExpectSameAsOcct(const Model& model, const FacePcurves& table) {
           Standard_Boolean stored = Standard_True;
           Handle(Geom2d_Curve) occt = BRep_Tool::CurveOnSurface(edge, face, first, last, &stored);
           projected += !stored;
-          const Pcurve ours = table.Find(model, f, face, model.edges.FindIndex(edge), edge);
+          const Pcurve ours = table.Find(f, face, model.edges.FindIndex(edge), edge);
           if (occt.IsNull() || ours.curve.IsNull()) {
             ADD_FAILURE() << "face " << f << ": a null pcurve";
             continue;
@@ -128,8 +128,8 @@ TEST(FacePcurvesTest, AnswersAsOcctOnSeamsAndOnPlanesWithoutStoredPcurves) {
       const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
       if (!BRep_Tool::IsClosed(edge, face)) continue;
       const int e = model->edges.FindIndex(edge);
-      const Pcurve a = table.Find(*model, f, face, e, edge);
-      const Pcurve b = table.Find(*model, f, face, e, TopoDS::Edge(edge.Reversed()));
+      const Pcurve a = table.Find(f, face, e, edge);
+      const Pcurve b = table.Find(f, face, e, TopoDS::Edge(edge.Reversed()));
       EXPECT_NEAR(std::fabs(a.curve->Value(a.first).X() - b.curve->Value(b.first).X()), 2 * M_PI,
                   1e-12);
       seam_seen = true;
