@@ -22,6 +22,8 @@
 #include <gp_Pnt.hxx>
 #include <gp_Sphere.hxx>
 #include <gp_Vec.hxx>
+#include <memory>
+#include <unordered_map>
 #include <vector>
 
 namespace rdmesh {
@@ -147,19 +149,27 @@ class CircleCurve final : public Curve {
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 Vec3 ToVec(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }
 
-// S(u,v) of a B-spline surface on one knot span, computed as OCCT's adaptor does it, bit for bit:
-// BSplSLib_Cache's Taylor coefficients of the span (built by BSplSLib::BuildCache for the span
-// its parameters locate), evaluated by Horner's rule along the direction of higher degree, then
-// the other (BSplSLib_Cache::D0 with PLib::NoDerivativeEvalPolynomial). Without the adaptor's
-// dispatch, its cache handle and the library's general polynomial loops.
-class SpanPolynomial {
+// S(u,v) of a B-spline surface, computed as OCCT's adaptor does it, bit for bit: BSplSLib_Cache's
+// Taylor coefficients of the knot span (built by BSplSLib::BuildCache), evaluated by Horner's rule
+// along the direction of higher degree, then the other (BSplSLib_Cache::D0 with
+// PLib::NoDerivativeEvalPolynomial). Without the adaptor's dispatch, its cache handle and the
+// library's general polynomial loops; and each span's coefficients are built once, when a point
+// first falls in it, and kept (an adaptor keeps one span and rebuilds it whenever a point falls in
+// another, which refinement does all the time: a triangle's samples straddle knot lines). Which
+// span a point takes depends on the point alone: [k_i, k_i+1) of the distinct knots after
+// periodic normalisation, the first and last spans open-ended. (An adaptor answers a point on a
+// knot line, or an ulp below it, from the span it built last, if that one holds it: there the
+// two may differ in the last bits.)
+class SpanPolynomials {
  public:
-  explicit SpanPolynomial(const Geom_BSplineSurface& s)
+  explicit SpanPolynomials(const Geom_BSplineSurface& s)
       : u_(s.UDegree(), s.IsUPeriodic(), s.UKnotSequence()),
         v_(s.VDegree(), s.IsVPeriodic(), s.VKnotSequence()),
         dimension_(s.Weights() ? 4 : 3),
-        coeffs_(1, std::max(u_.Degree, v_.Degree) + 1, 1,
-                dimension_ * (std::min(u_.Degree, v_.Degree) + 1)) {
+        size_(dimension_ * (std::max(u_.Degree, v_.Degree) + 1) *
+              (std::min(u_.Degree, v_.Degree) + 1)) {
+    for (int i = 1; i <= s.NbUKnots(); ++i) uknots_.push_back(s.UKnot(i));
+    for (int i = 1; i <= s.NbVKnots(); ++i) vknots_.push_back(s.VKnot(i));
     const int minor = std::min(u_.Degree, v_.Degree);
     if (minor >= 1 && minor <= 3) {
       using Fn = decltype(horner_);
@@ -170,32 +180,70 @@ class SpanPolynomial {
   }
 
   Vec3 Value(const Geom_BSplineSurface& s, double u, double v) {
-    if (!built_ || !u_.IsCacheValid(u) || !v_.IsCacheValid(v)) Build(s, u, v);
+    const double nu = u_.PeriodicNormalization(u), nv = v_.PeriodicNormalization(v);
+    const Span* span = last_;  // consecutive points mostly share a span
+    if (!span || !(span->lo_u <= nu && nu < span->hi_u && span->lo_v <= nv && nv < span->hi_v))
+      span = last_ = &Find(s, nu, nv);
     // Parameters local to the span: BSplSLib centres it, with half its length as unit.
-    double half_u = 0.5 * u_.SpanLength, start_u = u_.SpanStart + half_u;
-    double half_v = 0.5 * v_.SpanLength, start_v = v_.SpanStart + half_v;
-    double lu = (u_.PeriodicNormalization(u) - start_u) / half_u;
-    double lv = (v_.PeriodicNormalization(v) - start_v) / half_v;
+    double lu = (nu - span->start_u) / span->half_u;
+    double lv = (nv - span->start_v) / span->half_v;
     const bool u_major = u_.Degree > v_.Degree;
     const int major = u_major ? u_.Degree : v_.Degree, minor = u_major ? v_.Degree : u_.Degree;
     double r[4];
-    horner_(&coeffs_(1, 1), major, minor, dimension_, u_major ? lu : lv, u_major ? lv : lu, r);
+    horner_(&coeffs_[span->offset], major, minor, dimension_, u_major ? lu : lv, u_major ? lv : lu,
+            r);
     if (dimension_ == 4) r[0] /= r[3], r[1] /= r[3], r[2] /= r[3];
     return {r[0], r[1], r[2]};
   }
 
  private:
-  // BSplSLib_Cache::BuildCache.
-  void Build(const Geom_BSplineSurface& s, double u, double v) {
-    double nu = u_.PeriodicNormalization(u), nv = v_.PeriodicNormalization(v);
-    u_.LocateParameter(nu, s.UKnotSequence());
-    v_.LocateParameter(nv, s.VKnotSequence());
-    double half_u = 0.5 * u_.SpanLength, half_v = 0.5 * v_.SpanLength;
-    BSplSLib::BuildCache(u_.SpanStart + half_u, v_.SpanStart + half_v, half_u, half_v,
-                         u_.IsPeriodic, v_.IsPeriodic, u_.Degree, v_.Degree, u_.SpanIndex,
-                         v_.SpanIndex, s.UKnotSequence(), s.VKnotSequence(), s.Poles(), s.Weights(),
-                         coeffs_);
-    built_ = true;
+  struct Span {
+    double lo_u, hi_u, lo_v, hi_v;            // the (normalised) parameters it takes
+    double start_u, half_u, start_v, half_v;  // its centre and half length
+    size_t offset;                            // of its coefficients in coeffs_
+  };
+
+  // The span of distinct knots [k[i-1], k[i]) holding t, i in [1, size - 1], the first and last
+  // open-ended, into *lo, *hi; returns i.
+  static int Interval(const std::vector<double>& k, double t, double* lo, double* hi) {
+    const int last = static_cast<int>(k.size()) - 1;
+    int i = static_cast<int>(std::upper_bound(k.begin(), k.end(), t) - k.begin());
+    i = std::clamp(i, 1, std::max(last, 1));
+    *lo = i > 1 ? k[i - 1] : -HUGE_VAL;
+    *hi = i < last ? k[i] : HUGE_VAL;
+    return i;
+  }
+
+  // The span holding (nu, nv), its coefficients built on first use (BSplSLib_Cache::BuildCache
+  // for the span that OCCT locates for the span's middle).
+  const Span& Find(const Geom_BSplineSurface& s, double nu, double nv) {
+    Span span;
+    const int iu = Interval(uknots_, nu, &span.lo_u, &span.hi_u);
+    const int iv = Interval(vknots_, nv, &span.lo_v, &span.hi_v);
+    const uint64_t key = static_cast<uint64_t>(iu) << 32 | static_cast<uint32_t>(iv);
+    auto found = index_.find(key);
+    if (found != index_.end()) return spans_[found->second];
+    if (spans_.size() >= kMaxSpans) {  // a bound on memory; a span's coefficients never change
+      spans_.clear(), index_.clear(), coeffs_.clear();
+    }
+    index_.emplace(key, spans_.size());
+    double mu = 0.5 * (uknots_[iu - 1] + uknots_[iu]);
+    double mv = 0.5 * (vknots_[iv - 1] + vknots_[iv]);
+    u_.LocateParameter(mu, s.UKnotSequence());
+    v_.LocateParameter(mv, s.VKnotSequence());
+    const double half_u = 0.5 * u_.SpanLength, half_v = 0.5 * v_.SpanLength;
+    span.start_u = u_.SpanStart + half_u, span.half_u = half_u;
+    span.start_v = v_.SpanStart + half_v, span.half_v = half_v;
+    span.offset = coeffs_.size();
+    const int rows = std::max(u_.Degree, v_.Degree) + 1;
+    TColStd_Array2OfReal coeffs(1, rows, 1, static_cast<int>(size_) / rows);
+    BSplSLib::BuildCache(span.start_u, span.start_v, half_u, half_v, u_.IsPeriodic, v_.IsPeriodic,
+                         u_.Degree, v_.Degree, u_.SpanIndex, v_.SpanIndex, s.UKnotSequence(),
+                         s.VKnotSequence(), s.Poles(), s.Weights(), coeffs);
+    coeffs_.insert(coeffs_.end(), &coeffs(1, 1), &coeffs(1, 1) + size_);
+    spans_.push_back(span);
+    last_ = nullptr;  // spans_ may have moved
+    return spans_.back();
   }
 
   // The span's polynomial at (t_major, t_minor) into r[0..dimension): Horner's rule along the
@@ -222,19 +270,24 @@ class SpanPolynomial {
     }
   }
 
-  BSplCLib_CacheParams u_, v_;
-  const int dimension_;  // 3, or 4 with the weight
+  static constexpr size_t kMaxSpans = size_t{1} << 15;
+  BSplCLib_CacheParams u_, v_;  // the span last located (Find), and the normalisation
+  const int dimension_;         // 3, or 4 with the weight
+  const size_t size_;           // coefficients per span
   void (*horner_)(const double*, int, int, int, double, double, double*) = Horner<0, 0>;
-  TColStd_Array2OfReal coeffs_;
-  bool built_ = false;
+  std::vector<double> uknots_, vknots_;  // distinct knots
+  std::vector<Span> spans_;
+  std::unordered_map<uint64_t, size_t> index_;  // (u span, v span) -> spans_ index
+  std::vector<double> coeffs_;
+  const Span* last_ = nullptr;
 };
 
-// OCCT evaluator, with two speed-ups that keep OCCT's values bit for bit. A B-spline adaptor
-// evaluates through a polynomial cache of one knot span and rebuilds it whenever a point falls in
-// another span, which refinement does all the time (a triangle's samples straddle knot lines).
-// So B-splines get a few adaptors, each kept on the span it last served; the cache content
-// depends only on the span, so the values are the same. Planes, cylinders, cones and spheres
-// skip the adaptor's dispatch.
+// OCCT evaluator, with speed-ups that keep OCCT's values bit for bit. B-spline points come from
+// each knot span's polynomial, built once (SpanPolynomials). B-spline normals come from a few
+// adaptors, each kept on the span it last served: an adaptor evaluates through a polynomial cache
+// of one span and rebuilds it whenever a point falls in another; the cache content depends only
+// on the span, so the values are the same. Planes, cylinders, cones and spheres skip the
+// adaptor's dispatch.
 class OcctSurface final : public Surface {
  public:
   explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {
@@ -290,10 +343,8 @@ class OcctSurface final : public Surface {
     if (bspline->IsVPeriodic()) vknots.period = vknots.at.back() - vknots.at.front();
     bspline_ = bspline;
     spans_.resize(kSpans);
-    for (Span& span : spans_) {
-      span.adaptor.Load(surface);
-      span.polynomial = std::make_unique<SpanPolynomial>(*bspline);
-    }
+    for (Span& span : spans_) span.adaptor.Load(surface);
+    polynomials_ = std::make_unique<SpanPolynomials>(*bspline);
   }
   Vec3 Point(double u, double v) override {
     switch (kind_) {
@@ -308,7 +359,7 @@ class OcctSurface final : public Surface {
       case Kind::kOther:
         break;
     }
-    if (!spans_.empty()) return SpanOf(u, v).polynomial->Value(*bspline_, u, v);
+    if (polynomials_) return polynomials_->Value(*bspline_, u, v);
     return ToVec(adaptor_.Value(u, v));
   }
   Vec3 Normal(double u, double v) override {
@@ -385,8 +436,7 @@ class OcctSurface final : public Surface {
   struct Span {
     double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // its knot span: [u0, u1) x [v0, v1)
     uint64_t last_use = 0;
-    GeomAdaptor_Surface adaptor;                 // for normals
-    std::unique_ptr<SpanPolynomial> polynomial;  // for points
+    GeomAdaptor_Surface adaptor;  // for normals
   };
   // The adaptor to evaluate (u, v) with: for a B-spline its span's.
   const GeomAdaptor_Surface& Adaptor(double u, double v) {
@@ -432,7 +482,8 @@ class OcctSurface final : public Surface {
   std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
   Handle(Geom_BSplineSurface) bspline_;  // null unless B-spline
   std::vector<Span> spans_;              // empty unless B-spline
-  Span* last_ = nullptr;                 // the span slot SpanOf() returned last
+  std::unique_ptr<SpanPolynomials> polynomials_;  // B-spline points
+  Span* last_ = nullptr;                          // the span slot SpanOf() returned last
   uint64_t clock_ = 0;
 };
 
