@@ -85,7 +85,9 @@ int KnotsWithin(const Surface::KnotLines& k, double lo, double hi, double* at) {
   int n = 0;
   if (k.at.empty() || !(lo < hi)) return 0;
   double first = 0, last = 0;  // the periods to shift the knots by
-  if (k.period > 0) {
+  // Within one period of the knots (the usual case) only the knots themselves can fall inside:
+  // a copy shifted by a period lies wholly at or beyond one end.
+  if (k.period > 0 && !(lo >= k.at.front() && hi <= k.at.back())) {
     first = std::floor((lo - k.at.back()) / k.period);
     last = std::ceil((hi - k.at.front()) / k.period);
   }
