@@ -253,20 +253,59 @@ class SpanPolynomials {
   template <int kDim, int kMinor>
   static void Horner(const double* coeffs, int major, int minor, int dimension, double t_major,
                      double t_minor, double r[4]) {
-    const int dim = kMinor > 0 ? kDim : dimension, low = kMinor > 0 ? kMinor : minor;
-    const int cols = dim * (low + 1);
-    double row[4 * 26];  // cols <= 4 x (BSplCLib::MaxDegree() + 1)
-    const double* c = coeffs + major * cols;
-    for (int j = 0; j < cols; ++j) row[j] = c[j];
-    for (int i = 0; i < major; ++i) {
-      c -= cols;
-      for (int j = 0; j < cols; ++j) row[j] = row[j] * t_major + c[j];
-    }
-    const double* d = row + low * dim;
-    for (int j = 0; j < dim; ++j) r[j] = d[j];
-    for (int i = 0; i < low; ++i) {
-      d -= dim;
-      for (int j = 0; j < dim; ++j) r[j] = r[j] * t_minor + d[j];
+    if constexpr (kMinor > 0) {
+      // The row and the result in fixed-size arrays, indexed by constants once the loops unroll,
+      // so that they stay in registers (a row walked by pointer went through the stack, with
+      // overlapping loads and stores between the two passes).
+      // Per minor index i, the first two coordinates as one pair and the rest one by one: the
+      // same operations on each element, in registers throughout.
+      typedef double Pair __attribute__((vector_size(16)));
+      constexpr int kCols = kDim * (kMinor + 1), kRest = kDim - 2;
+      Pair pair[kMinor + 1];
+      double rest[kMinor + 1][kRest > 0 ? kRest : 1];
+      const double* c = coeffs + major * kCols;
+      auto load = [&](const double* at, int i) {
+        Pair p;
+        std::memcpy(&p, at + i * kDim, sizeof(p));
+        return p;
+      };
+      for (int i = 0; i <= kMinor; ++i) {
+        pair[i] = load(c, i);
+        for (int k = 0; k < kRest; ++k) rest[i][k] = c[i * kDim + 2 + k];
+      }
+      const Pair tm = {t_major, t_major};
+      for (int step = 0; step < major; ++step) {
+        c -= kCols;
+        for (int i = 0; i <= kMinor; ++i) {
+          pair[i] = pair[i] * tm + load(c, i);
+          for (int k = 0; k < kRest; ++k) rest[i][k] = rest[i][k] * t_major + c[i * kDim + 2 + k];
+        }
+      }
+      const Pair tn = {t_minor, t_minor};
+      Pair out = pair[kMinor];
+      double out_rest[kRest > 0 ? kRest : 1];
+      for (int k = 0; k < kRest; ++k) out_rest[k] = rest[kMinor][k];
+      for (int i = kMinor - 1; i >= 0; --i) {
+        out = out * tn + pair[i];
+        for (int k = 0; k < kRest; ++k) out_rest[k] = out_rest[k] * t_minor + rest[i][k];
+      }
+      r[0] = out[0], r[1] = out[1];
+      for (int k = 0; k < kRest; ++k) r[2 + k] = out_rest[k];
+    } else {
+      const int cols = dimension * (minor + 1);
+      double row[4 * 26];  // cols <= 4 x (BSplCLib::MaxDegree() + 1)
+      const double* c = coeffs + major * cols;
+      for (int j = 0; j < cols; ++j) row[j] = c[j];
+      for (int i = 0; i < major; ++i) {
+        c -= cols;
+        for (int j = 0; j < cols; ++j) row[j] = row[j] * t_major + c[j];
+      }
+      const double* d = row + minor * dimension;
+      for (int j = 0; j < dimension; ++j) r[j] = d[j];
+      for (int i = 0; i < minor; ++i) {
+        d -= dimension;
+        for (int j = 0; j < dimension; ++j) r[j] = r[j] * t_minor + d[j];
+      }
     }
   }
 
