@@ -49,7 +49,7 @@ PatternSearchResult CrossPatternSearch(const std::function<double(Vec2)>& f,
 PatternSearchResult CrossPatternSearch(const BoundedObjective& f,
                                        const std::function<bool(Vec2)>& feasible, Vec2 x0,
                                        double f0, Vec2 step, double min_step_fraction,
-                                       int max_evals) {
+                                       int max_evals, double enough) {
   // Every probe's value (or upper bound), to answer repeated probes: after a move the probe back
   // and the extrapolated point are often ones the search has seen. A stored bound stays valid
   // because the bounds passed to f never decrease (they are the best value so far).
@@ -69,7 +69,7 @@ PatternSearchResult CrossPatternSearch(const BoundedObjective& f,
   PatternSearchResult r{x0, f0, 0};
   Vec2 h = step;
   const Vec2 min_h = min_step_fraction * step;
-  while (r.evals < max_evals && (h.x > min_h.x || h.y > min_h.y)) {
+  while (r.evals < max_evals && (h.x > min_h.x || h.y > min_h.y) && r.value < enough) {
     const Vec2 probes[4] = {{h.x, 0}, {-h.x, 0}, {0, h.y}, {0, -h.y}};
     Vec2 best_x = r.x;
     double best = r.value;

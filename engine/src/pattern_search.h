@@ -2,6 +2,7 @@
 // Derivative-free optimisers: every placement in the method (edge split, triangle split, node
 // smoothing) is a local search over surface or curve evaluations only.
 
+#include <cmath>
 #include <functional>
 
 #include "geom.h"
@@ -32,10 +33,11 @@ PatternSearchResult CrossPatternSearch(const std::function<double(Vec2)>& f,
 /// The same search with a bounded objective: f(x, bound) must return f's exact value when it
 /// exceeds `bound`, and may return any value <= bound otherwise (so an expensive objective can
 /// stop as soon as it knows the probe cannot win). Takes the same steps as the unbounded search.
+/// It stops as soon as the best value reaches `enough`.
 using BoundedObjective = std::function<double(Vec2 x, double bound)>;
 PatternSearchResult CrossPatternSearch(const BoundedObjective& f,
                                        const std::function<bool(Vec2)>& feasible, Vec2 x0,
                                        double f0, Vec2 step, double min_step_fraction,
-                                       int max_evals);
+                                       int max_evals, double enough = HUGE_VAL);
 
 }  // namespace rdmesh

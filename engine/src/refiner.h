@@ -5,6 +5,7 @@
 // flips), improve.cpp the improvement passes (collapse, flip, smooth).
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <queue>
 #include <tuple>
@@ -139,7 +140,9 @@ class Refiner {
   };
   bool BestCollapse(int v, CollapseChoice* best, double slack = 1.0);
   bool CollapseAndSmooth(int v, CollapseChoice& choice);
-  bool SmoothNode(int v);
+  // Moves v to lower the largest violation of its ring; the search stops early once that is at
+  // or below `enough` (by default it goes on to the best it finds).
+  bool SmoothNode(int v, double enough = -HUGE_VAL);
   // Marks in *near (one per node) the nodes within two rings of each collapse's survivor.
   int CollapsePass(std::vector<uint8_t>* near);
   int FlipPass();
