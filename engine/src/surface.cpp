@@ -149,6 +149,18 @@ class CircleCurve final : public Curve {
 Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 Vec3 ToVec(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }
 
+// The knot span [k[i-1], k[i]) of the distinct knots k holding t, i in [1, size - 1], the first
+// and last open-ended, into *lo, *hi; returns i. A (periodically normalised) parameter's span, as
+// both B-spline evaluators of OcctSurface take it.
+int KnotSpan(const std::vector<double>& k, double t, double* lo, double* hi) {
+  const int last = static_cast<int>(k.size()) - 1;
+  int i = static_cast<int>(std::upper_bound(k.begin(), k.end(), t) - k.begin());
+  i = std::clamp(i, 1, std::max(last, 1));
+  *lo = i > 1 ? k[i - 1] : -HUGE_VAL;
+  *hi = i < last ? k[i] : HUGE_VAL;
+  return i;
+}
+
 // S(u,v) of a B-spline surface, computed as OCCT's adaptor does it, bit for bit: BSplSLib_Cache's
 // Taylor coefficients of the knot span (built by BSplSLib::BuildCache), evaluated by Horner's rule
 // along the direction of higher degree, then the other (BSplSLib_Cache::D0 with
@@ -179,6 +191,11 @@ class SpanPolynomials {
     }
   }
 
+  // (u, v) periodically normalised as BSplSLib_Cache does it.
+  void Normalize(double* u, double* v) const {
+    *u = u_.PeriodicNormalization(*u), *v = v_.PeriodicNormalization(*v);
+  }
+
   Vec3 Value(const Geom_BSplineSurface& s, double u, double v) {
     const double nu = u_.PeriodicNormalization(u), nv = v_.PeriodicNormalization(v);
     const Span* span = last_;  // consecutive points mostly share a span
@@ -203,23 +220,12 @@ class SpanPolynomials {
     size_t offset;                            // of its coefficients in coeffs_
   };
 
-  // The span of distinct knots [k[i-1], k[i]) holding t, i in [1, size - 1], the first and last
-  // open-ended, into *lo, *hi; returns i.
-  static int Interval(const std::vector<double>& k, double t, double* lo, double* hi) {
-    const int last = static_cast<int>(k.size()) - 1;
-    int i = static_cast<int>(std::upper_bound(k.begin(), k.end(), t) - k.begin());
-    i = std::clamp(i, 1, std::max(last, 1));
-    *lo = i > 1 ? k[i - 1] : -HUGE_VAL;
-    *hi = i < last ? k[i] : HUGE_VAL;
-    return i;
-  }
-
   // The span holding (nu, nv), its coefficients built on first use (BSplSLib_Cache::BuildCache
   // for the span that OCCT locates for the span's middle).
   const Span& Find(const Geom_BSplineSurface& s, double nu, double nv) {
     Span span;
-    const int iu = Interval(uknots_, nu, &span.lo_u, &span.hi_u);
-    const int iv = Interval(vknots_, nv, &span.lo_v, &span.hi_v);
+    const int iu = KnotSpan(uknots_, nu, &span.lo_u, &span.hi_u);
+    const int iv = KnotSpan(vknots_, nv, &span.lo_v, &span.hi_v);
     const uint64_t key = static_cast<uint64_t>(iu) << 32 | static_cast<uint32_t>(iv);
     auto found = index_.find(key);
     if (found != index_.end()) return spans_[found->second];
@@ -482,9 +488,13 @@ class OcctSurface final : public Surface {
     return spans_.empty() ? adaptor_ : SpanOf(u, v).adaptor;
   }
   // A B-spline's span slot for (u, v): the one on its knot span, else the least recently used
-  // one, which moves there.
+  // one, which moves there. A slot's adaptor is put on its span's polynomial (a point in the
+  // span's middle) when the slot moves, so that a point takes its span's derivatives whatever the
+  // slot served before: an adaptor keeps its cached span for any point within it, and rebuilds at
+  // the point otherwise, where a point an ulp below a knot locates the span above.
   Span& SpanOf(double u, double v) {
     ++clock_;
+    polynomials_->Normalize(&u, &v);
     Span* last = last_;  // consecutive points mostly share a span: try the last one first
     if (last && last->u0 <= u && u < last->u1 && last->v0 <= v && v < last->v1) {
       last->last_use = clock_;
@@ -499,14 +509,11 @@ class OcctSurface final : public Surface {
       }
       if (span.last_use < oldest->last_use) oldest = &span;
     }
-    // The knot interval [k[i-1], k[i]) holding t, open-ended beyond the first and last knots.
-    auto interval = [](const std::vector<double>& k, double t, double* lo, double* hi) {
-      size_t i = std::upper_bound(k.begin(), k.end(), t) - k.begin();
-      *lo = i > 0 ? k[i - 1] : -HUGE_VAL;
-      *hi = i < k.size() ? k[i] : HUGE_VAL;
-    };
-    interval(uknots.at, u, &oldest->u0, &oldest->u1);
-    interval(vknots.at, v, &oldest->v0, &oldest->v1);
+    const int iu = KnotSpan(uknots.at, u, &oldest->u0, &oldest->u1);
+    const int iv = KnotSpan(vknots.at, v, &oldest->v0, &oldest->v1);
+    gp_Pnt middle;
+    oldest->adaptor.D0(0.5 * (uknots.at[iu - 1] + uknots.at[iu]),
+                       0.5 * (vknots.at[iv - 1] + vknots.at[iv]), middle);
     oldest->last_use = clock_;
     last_ = oldest;
     return *oldest;

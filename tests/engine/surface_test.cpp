@@ -153,7 +153,7 @@ TEST(SurfaceTest, BSplinePointsMatchOcctBitForBit) {
 TEST(SurfaceTest, BSplinePointsAtKnotsDoNotDependOnWhatCameBefore) {
   // A point on a knot line, or an ulp beside it, takes one span whatever span the evaluator met
   // last (an OCCT adaptor keeps the span it last built while the point is within it, so there the
-  // order could decide which span's polynomial answers).
+  // order could decide which span's polynomial answers), for its point and for its normal.
   // Bicubic, 5 x 4 spans on uneven knots.
   TColgp_Array2OfPnt poles(1, 8, 1, 7);
   for (int i = 1; i <= 8; ++i)
@@ -180,13 +180,24 @@ TEST(SurfaceTest, BSplinePointsAtKnotsDoNotDependOnWhatCameBefore) {
   for (double k : forward->vknots.at)
     for (double v : {std::nextafter(k, -HUGE_VAL), k, std::nextafter(k, HUGE_VAL)})
       points.push_back({mid_u, v});
-  std::vector<Vec3> ahead;
-  for (const Vec2& q : points) ahead.push_back(forward->Point(q.x, q.y));
-  for (size_t i = points.size(); i-- > 0;) {
-    ASSERT_TRUE(SameBits(ahead[i], backward->Point(points[i].x, points[i].y))) << i;
-    std::unique_ptr<Surface> fresh = MakeFaceSurface(face, false);
-    ASSERT_TRUE(SameBits(ahead[i], fresh->Point(points[i].x, points[i].y))) << i;
+  std::vector<Vec3> ahead, normals;
+  for (const Vec2& q : points) {
+    ahead.push_back(forward->Point(q.x, q.y));
+    normals.push_back(forward->Normal(q.x, q.y));
   }
+  for (size_t i = points.size(); i-- > 0;) {
+    const Vec2& q = points[i];
+    ASSERT_TRUE(SameBits(ahead[i], backward->Point(q.x, q.y))) << i;
+    ASSERT_TRUE(SameBits(normals[i], backward->Normal(q.x, q.y))) << i;
+    std::unique_ptr<Surface> fresh = MakeFaceSurface(face, false);
+    ASSERT_TRUE(SameBits(normals[i], fresh->Normal(q.x, q.y))) << i;
+    ASSERT_TRUE(SameBits(ahead[i], fresh->Point(q.x, q.y))) << i;
+  }
+  // Normals after points spread over every span, so that each slot served other spans first.
+  std::unique_ptr<Surface> busy = MakeFaceSurface(face, false);
+  for (const Vec2& q : Samples(*busy, 500, 8)) busy->Normal(q.x, q.y);
+  for (size_t i = points.size(); i-- > 0;)
+    ASSERT_TRUE(SameBits(normals[i], busy->Normal(points[i].x, points[i].y))) << i;
   // Beside a knot the two spans' polynomials agree to rounding: the surface is continuous.
   GeomAdaptor_Surface occt(wavy);
   for (size_t i = 0; i < points.size(); ++i) {
