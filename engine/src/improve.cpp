@@ -28,7 +28,7 @@ constexpr int kSettleFlipPasses = 5;
 // which the final check (Refiner::Verify) now catches (bench/RESULTS.md, "The final check").
 // 50 rather than 100 spares the last round on the larger B-spline faces (7-9% fewer instructions
 // on gmsh_periodic_u_cst at 1e-3 and gmsh_mambo_s34 at 1e-4, +0.1% triangles over the default
-// set; bench/RESULTS.md, "Collapse attempts that stop sooner").
+// set; bench/RESULTS.md, "B-spline spans built once, and collapse attempts that stop sooner").
 constexpr int kStopCollapseDivisor = 50;
 
 // A collapse that leaves its region over the criteria moves the survivor, then its neighbours,
