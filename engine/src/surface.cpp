@@ -180,8 +180,6 @@ class SpanPolynomials {
         dimension_(s.Weights() ? 4 : 3),
         size_(dimension_ * (std::max(u_.Degree, v_.Degree) + 1) *
               (std::min(u_.Degree, v_.Degree) + 1)) {
-    for (int i = 1; i <= s.NbUKnots(); ++i) uknots_.push_back(s.UKnot(i));
-    for (int i = 1; i <= s.NbVKnots(); ++i) vknots_.push_back(s.VKnot(i));
     const int minor = std::min(u_.Degree, v_.Degree);
     if (minor >= 1 && minor <= 3) {
       using Fn = decltype(horner_);
@@ -196,11 +194,13 @@ class SpanPolynomials {
     *u = u_.PeriodicNormalization(*u), *v = v_.PeriodicNormalization(*v);
   }
 
-  Vec3 Value(const Geom_BSplineSurface& s, double u, double v) {
+  // `uknots`, `vknots`: the surface's distinct knots (Surface::uknots.at, vknots.at).
+  Vec3 Value(const Geom_BSplineSurface& s, const std::vector<double>& uknots,
+             const std::vector<double>& vknots, double u, double v) {
     const double nu = u_.PeriodicNormalization(u), nv = v_.PeriodicNormalization(v);
     const Span* span = last_;  // consecutive points mostly share a span
     if (!span || !(span->lo_u <= nu && nu < span->hi_u && span->lo_v <= nv && nv < span->hi_v))
-      span = last_ = &Find(s, nu, nv);
+      span = last_ = &Find(s, uknots, vknots, nu, nv);
     // Parameters local to the span: BSplSLib centres it, with half its length as unit.
     double lu = (nu - span->start_u) / span->half_u;
     double lv = (nv - span->start_v) / span->half_v;
@@ -222,10 +222,11 @@ class SpanPolynomials {
 
   // The span holding (nu, nv), its coefficients built on first use (BSplSLib_Cache::BuildCache
   // for the span that OCCT locates for the span's middle).
-  const Span& Find(const Geom_BSplineSurface& s, double nu, double nv) {
+  const Span& Find(const Geom_BSplineSurface& s, const std::vector<double>& uknots,
+                   const std::vector<double>& vknots, double nu, double nv) {
     Span span;
-    const int iu = KnotSpan(uknots_, nu, &span.lo_u, &span.hi_u);
-    const int iv = KnotSpan(vknots_, nv, &span.lo_v, &span.hi_v);
+    const int iu = KnotSpan(uknots, nu, &span.lo_u, &span.hi_u);
+    const int iv = KnotSpan(vknots, nv, &span.lo_v, &span.hi_v);
     const uint64_t key = static_cast<uint64_t>(iu) << 32 | static_cast<uint32_t>(iv);
     auto found = index_.find(key);
     if (found != index_.end()) return spans_[found->second];
@@ -233,8 +234,8 @@ class SpanPolynomials {
       spans_.clear(), index_.clear(), coeffs_.clear();
     }
     index_.emplace(key, spans_.size());
-    double mu = 0.5 * (uknots_[iu - 1] + uknots_[iu]);
-    double mv = 0.5 * (vknots_[iv - 1] + vknots_[iv]);
+    double mu = 0.5 * (uknots[iu - 1] + uknots[iu]);
+    double mv = 0.5 * (vknots[iv - 1] + vknots[iv]);
     u_.LocateParameter(mu, s.UKnotSequence());
     v_.LocateParameter(mv, s.VKnotSequence());
     const double half_u = 0.5 * u_.SpanLength, half_v = 0.5 * v_.SpanLength;
@@ -260,11 +261,10 @@ class SpanPolynomials {
   static void Horner(const double* coeffs, int major, int minor, int dimension, double t_major,
                      double t_minor, double r[4]) {
     if constexpr (kMinor > 0) {
-      // The row and the result in fixed-size arrays, indexed by constants once the loops unroll,
-      // so that they stay in registers (a row walked by pointer went through the stack, with
-      // overlapping loads and stores between the two passes).
-      // Per minor index i, the first two coordinates as one pair and the rest one by one: the
-      // same operations on each element, in registers throughout.
+      // Per minor index i, the first two coordinates as one pair and the rest one by one, in
+      // fixed-size arrays indexed by constants once the loops unroll, so that they stay in
+      // registers: the same operations on each element as the general loop below (a row walked
+      // by pointer went through the stack, read back at other offsets than it was written).
       typedef double Pair __attribute__((vector_size(16)));
       constexpr int kCols = kDim * (kMinor + 1), kRest = kDim - 2;
       Pair pair[kMinor + 1];
@@ -320,7 +320,6 @@ class SpanPolynomials {
   const int dimension_;         // 3, or 4 with the weight
   const size_t size_;           // coefficients per span
   void (*horner_)(const double*, int, int, int, double, double, double*) = Horner<0, 0>;
-  std::vector<double> uknots_, vknots_;  // distinct knots
   std::vector<Span> spans_;
   std::unordered_map<uint64_t, size_t> index_;  // (u span, v span) -> spans_ index
   std::vector<double> coeffs_;
@@ -404,7 +403,7 @@ class OcctSurface final : public Surface {
       case Kind::kOther:
         break;
     }
-    if (polynomials_) return polynomials_->Value(*bspline_, u, v);
+    if (polynomials_) return polynomials_->Value(*bspline_, uknots.at, vknots.at, u, v);
     return ToVec(adaptor_.Value(u, v));
   }
   Vec3 Normal(double u, double v) override {
