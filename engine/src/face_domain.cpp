@@ -1,5 +1,6 @@
 #include "face_domain.h"
 
+#include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
 #include <Standard_Failure.hxx>
 #include <TopoDS.hxx>
@@ -251,6 +252,18 @@ double BoundaryGap(const FaceDomain& domain, Surface& surface) {
     // point, along the surface.
     const Vec3 off = domain.xyz[i] - surface.Point(q.x, q.y);
     gap = std::max(gap, std::fabs(Dot(off, surface.Normal(q.x, q.y))));
+  }
+  return gap;
+}
+
+double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain) {
+  const BRepAdaptor_Surface surface(face, false);
+  double gap = 0;
+  for (size_t i = 0; i < domain.uv.size(); ++i) {
+    const Vec2 q = domain.uv[i], in = IntoSurfaceRange(surface, q);
+    if (in.x == q.x && in.y == q.y) continue;
+    const gp_Pnt s = surface.Value(in.x, in.y);
+    gap = std::max(gap, Dist(domain.xyz[i], Vec3{s.X(), s.Y(), s.Z()}));
   }
   return gap;
 }

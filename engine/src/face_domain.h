@@ -53,6 +53,12 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
 /// points to the surface, so the face cannot be meshed much closer than this.
 double BoundaryGap(const FaceDomain& domain, Surface& surface);
 
+/// How far the domain's nodes lie off the face where their (u,v) runs past the surface's own
+/// range (IntoSurfaceRange): the largest |xyz - S(uv moved into the range)|, 0 where none does.
+/// There OCCT extends the surface, so BoundaryGap sees the extension, while the face ends at the
+/// range. `domain` in the face's own (u,v) (not its B-spline conversion's).
+double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain);
+
 /// How far the chords of the domain's edge segments (not bridges) lie off the surface at their
 /// middles, along the normal: the largest |(S(mid uv) - mid xyz) . N(mid uv)|. Face refinement
 /// cannot change them; the edge grids set them (and keep them no finer than the edge tolerance).

@@ -284,11 +284,12 @@ FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
     f.max_deviation = stats.max_deviation;
     f.status = FaceStatus::kOk;
     // The B-rep itself keeps the face from the requested deviation where its edges lie off the
-    // surface by more (BoundaryGap), or where its edges' tolerance is coarser and the face misses
-    // it or its edges' chords do (edge grids are not refined below an edge's tolerance:
-    // grids.cpp).
+    // surface by more (BoundaryGap, or past the surface's own range: BoundaryGapPastSurface), or
+    // where its edges' tolerance is coarser and the face misses it or its edges' chords do (edge
+    // grids are not refined below an edge's tolerance: grids.cpp).
     const double deviation = job.criteria.max_deviation;
-    const double gap = deviation > 0 ? BoundaryGap(domain, *surface) : 0;
+    double gap = deviation > 0 ? BoundaryGap(domain, *surface) : 0;
+    if (deviation > 0 && !job.nurbs) gap = std::max(gap, BoundaryGapPastSurface(face, domain));
     const double tolerance = deviation > 0 ? EdgeTolerance(face) : 0;
     const bool missed = stats.max_violation > 1.0 + 1e-9;
     const bool coarse =

@@ -174,7 +174,8 @@ double CurveDistance(Curve& curve, Vec3 x, double a, double b) {
 }
 
 // How far the edge's 3D curve lies from one face's boundary, at `samples` + 1 even parameter
-// steps: the largest distance of S(p(t)), the point of the face's pcurve, from C(t) (`exact`
+// steps: the largest distance of S(p(t)), the point of the face's pcurve (kept within the
+// surface's own range: IntoSurfaceRange), from C(t) (`exact`
 // false: the curve at the same parameter, no less than the next) or from the curve near t
 // (`exact` true: between the neighbouring steps, which a pcurve whose parameter runs ahead of the
 // curve's does not inflate). A face's mesh follows the curve (its boundary nodes are curve
@@ -190,7 +191,8 @@ double FaceGap(const Adaptor3d_Surface& surface, const Geom2d_Curve& pcurve, dou
     // (A pcurve's range is the curve's on a same-parameter edge; else mapped linearly.)
     const double tp = p0 == first && p1 == last ? t : p0 + (p1 - p0) * k / samples;
     const gp_Pnt2d q = pcurve.Value(tp);
-    const gp_Pnt s = surface.Value(q.X(), q.Y());
+    const Vec2 uv = IntoSurfaceRange(surface, {q.X(), q.Y()});
+    const gp_Pnt s = surface.Value(uv.x, uv.y);
     const Vec3 x{s.X(), s.Y(), s.Z()};
     const double d =
         exact ? CurveDistance(curve, x, param(k - 1), param(k + 1)) : Dist(curve.Point(t), x);

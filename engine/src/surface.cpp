@@ -10,6 +10,7 @@
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
+#include <Precision.hxx>
 #include <TColStd_Array2OfReal.hxx>
 #include <algorithm>
 #include <array>
@@ -595,6 +596,15 @@ std::unique_ptr<Curve> MakeEdgeCurve(const TopoDS_Edge& edge) {
   if (BRep_Tool::Degenerated(edge)) return nullptr;
   // BRepAdaptor_Curve falls back to the curve on a surface when there is no 3D curve.
   return std::make_unique<OcctCurve>(edge);
+}
+
+Vec2 IntoSurfaceRange(const Adaptor3d_Surface& surface, Vec2 uv) {
+  auto within = [](double x, double first, double last, bool periodic) {
+    if (periodic || Precision::IsInfinite(first) || Precision::IsInfinite(last)) return x;
+    return std::clamp(x, first, last);
+  };
+  return {within(uv.x, surface.FirstUParameter(), surface.LastUParameter(), surface.IsUPeriodic()),
+          within(uv.y, surface.FirstVParameter(), surface.LastVParameter(), surface.IsVPeriodic())};
 }
 
 }  // namespace rdmesh

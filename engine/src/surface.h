@@ -12,6 +12,8 @@
 
 #include "geom.h"
 
+class Adaptor3d_Surface;
+
 namespace rdmesh {
 
 /// A parametric surface. Point() is all refinement needs; Normal() serves fold guards and output.
@@ -87,6 +89,12 @@ std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs);
 /// The same with the face's BRepTools::UVBounds already at hand (FacePcurves::Bounds).
 std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs,
                                          const UvBounds& bounds);
+/// (u, v) moved into the surface's own parameter range (a B-spline's knot range, a trimmed
+/// surface's bounds); periodic and unbounded directions are left as they are. A pcurve may run
+/// past that range (gmsh_solid_56: up to 0.014 mm off a B-spline's edge), where OCCT extends the
+/// surface, while the face ends at the range.
+Vec2 IntoSurfaceRange(const Adaptor3d_Surface& surface, Vec2 uv);
+
 /// Null when the edge has no 3D curve (degenerate edges).
 std::unique_ptr<Curve> MakeEdgeCurve(const TopoDS_Edge& edge);
 

@@ -7,6 +7,9 @@
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
+#include <Geom_Plane.hxx>
+#include <Geom_RectangularTrimmedSurface.hxx>
+#include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
 #include <TopoDS_Wire.hxx>
 #include <gp_Ax2.hxx>
@@ -51,6 +54,19 @@ inline Status Domain(const Model& model, int face_id, const std::vector<EdgeGrid
   std::unique_ptr<Surface> surface =
       MakeFaceSurface(model.face(face_id), false, pcurves.Bounds(model, face_id));
   return BuildFaceDomain(model, pcurves, face_id, grids, *surface, domain);
+}
+
+/// A disc of radius 1 whose plane is a surface trimmed to y <= 0.9: the rim's pcurve runs past
+/// the surface's own range for |x| < 0.44, up to 0.1 beyond it, where OCCT extends the plane while
+/// the face ends at y = 0.9 (as a B-spline's edges may run past its knot range).
+inline TopoDS_Face DiscPastItsSurface() {
+  Handle(Geom_Surface) plane =
+      new Geom_RectangularTrimmedSurface(new Geom_Plane(gp_Pln(gp::XOY())), -2.0, 2.0, -2.0, 0.9);
+  BRepBuilderAPI_MakeFace make(
+      plane, BRepBuilderAPI_MakeWire(
+                 BRepBuilderAPI_MakeEdge(gp_Circ(gp_Ax2(gp::Origin(), gp::DZ()), 1.0)).Edge())
+                 .Wire());
+  return make.IsDone() ? make.Face() : TopoDS_Face();
 }
 
 /// A disc of radius 1.5875 with a concentric hole of radius 1.0795 (a face of a real assembly).

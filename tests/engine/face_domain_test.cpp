@@ -53,6 +53,7 @@
 namespace rdmesh {
 namespace {
 
+using testing::DiscPastItsSurface;
 using testing::DiscWithHole;
 using testing::Domain;
 using testing::Grids;
@@ -265,6 +266,32 @@ TEST(FaceDomainTest, LoosePcurveFaceMeetsTheCriteria) {
   EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
   EXPECT_EQ(f.reason, "");
   EXPECT_LE(f.max_deviation, deviation * (1 + 1e-9));
+}
+
+// The disc's rim runs up to 0.1 past its surface's range, where OCCT extends the plane:
+// BoundaryGap sees the extension (nothing off it), BoundaryGapPastSurface the face as it ends.
+// Against a deviation of 0.03 the face reports the B-rep.
+TEST(FaceDomainTest, EdgesPastTheSurfacesRangeAreMeasuredFromTheFace) {
+  const TopoDS_Face face = DiscPastItsSurface();
+  ASSERT_FALSE(face.IsNull());
+  auto model = LoadShape(face, "disc_past_range");
+  ASSERT_TRUE(model);
+  std::vector<EdgeGrid> grids = Grids(*model, 0.03);
+  FaceDomain domain;
+  ASSERT_TRUE(Domain(*model, 1, grids, &domain).ok());
+  std::unique_ptr<Surface> surface = MakeFaceSurface(model->face(1), false);
+  EXPECT_LT(BoundaryGap(domain, *surface), 1e-9);
+  double beyond = 0;  // the farthest grid point past y = 0.9
+  for (const Vec3& x : domain.xyz) beyond = std::max(beyond, x.y - 0.9);
+  EXPECT_GT(beyond, 0.03);
+  EXPECT_NEAR(BoundaryGapPastSurface(model->face(1), domain), beyond, 1e-9);
+
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(MeshFaces(DiscPastItsSurface(), "disc_past_range", 0.03, &faces));
+  ASSERT_EQ(faces.size(), 1u);
+  EXPECT_EQ(faces[0].status, FaceStatus::kOk);
+  EXPECT_EQ(faces[0].reason.rfind("the B-rep prevents the requested deviation 0.03", 0), 0u)
+      << faces[0].reason;
 }
 
 }  // namespace

@@ -121,20 +121,40 @@ TEST(GridsTest, ChordsLeaveRoomForTheGapBetweenAnEdgeAndItsFace) {
   EXPECT_GT(sagitta, 0.9 * (kDeviation - kGap));  // no finer than it needs
 }
 
-// Without the gap the same disc keeps the whole deviation for its chords.
-TEST(GridsTest, ChordsOfAnEdgeOnItsFaceTakeTheWholeDeviation) {
-  auto model = LoadShape(DiscWithLiftedRim(0.0), "flat_rim");
+// The largest radial sagitta of the chords of a disc's one rim edge of radius 1, its grid built
+// at `deviation`.
+void RimSagitta(const TopoDS_Face& disc, double deviation, double* sagitta) {
+  auto model = LoadShape(disc, "disc");
   ASSERT_TRUE(model);
+  ASSERT_EQ(model->edge_count(), 1);
   GridCriteria criteria;
-  criteria.max_deviation = 0.01;
+  criteria.max_deviation = deviation;
   std::vector<EdgeGrid> grids;
   ASSERT_TRUE(
       BuildEdgeGrids(*model, testing::Pcurves(*model), criteria, 1, {}, nullptr, &grids).ok());
-  double sagitta = 0;
+  *sagitta = 0;
   for (size_t k = 0; k + 1 < grids[0].xyz.size(); ++k)
-    sagitta = std::max(sagitta, 1.0 - Norm(0.5 * (grids[0].xyz[k] + grids[0].xyz[k + 1])));
+    *sagitta = std::max(*sagitta, 1.0 - Norm(0.5 * (grids[0].xyz[k] + grids[0].xyz[k + 1])));
+}
+
+// Without the gap the same disc keeps the whole deviation for its chords.
+TEST(GridsTest, ChordsOfAnEdgeOnItsFaceTakeTheWholeDeviation) {
+  double sagitta = 0;
+  ASSERT_NO_FATAL_FAILURE(RimSagitta(DiscWithLiftedRim(0.0), 0.01, &sagitta));
   EXPECT_LE(sagitta, 0.01 * 1.001);
   EXPECT_GT(sagitta, 0.9 * 0.01);
+}
+
+// The rim lies up to 0.1 past its surface against a deviation of 0.15: its chords get the 0.05
+// that leaves (10 segments or more), not the whole 0.15 (6 segments, sagitta 0.134, which would
+// put the mesh up to 0.23 off the face where it ends).
+TEST(GridsTest, ChordsLeaveRoomForAnEdgePastItsSurfacesRange) {
+  const TopoDS_Face face = testing::DiscPastItsSurface();
+  ASSERT_FALSE(face.IsNull());
+  double sagitta = 0;
+  ASSERT_NO_FATAL_FAILURE(RimSagitta(face, 0.15, &sagitta));
+  EXPECT_LE(sagitta, 0.05 * 1.01);
+  EXPECT_GT(sagitta, 0.5 * 0.05);
 }
 
 }  // namespace
