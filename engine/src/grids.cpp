@@ -173,15 +173,14 @@ double CurveDistance(Curve& curve, Vec3 x, double a, double b) {
   return std::min({best, fc, fd});
 }
 
-// How far the edge's 3D curve lies from one face's boundary, at `samples` + 1 even parameter
-// steps: the largest distance of S(p(t)), the point of the face's pcurve (kept within the
-// surface's own range: IntoSurfaceRange), from C(t) (`exact`
-// false: the curve at the same parameter, no less than the next) or from the curve near t
-// (`exact` true: between the neighbouring steps, which a pcurve whose parameter runs ahead of the
-// curve's does not inflate). A face's mesh follows the curve (its boundary nodes are curve
-// points), the face's trim follows the pcurve, so a chord's points lie up to this much farther
-// from the face than from the curve: along the normal (off the surface) or within the surface
-// (outside the trim: gmsh_solid_56 edge 94, 0.019 mm within its tolerance).
+// How far the edge's 3D curve lies from one face's boundary, at `samples` + 1 even parameter steps:
+// the largest distance of S(p(t)), the point of the face's pcurve (kept within the surface's own
+// range: IntoSurfaceRange), from C(t) (`exact` false: the curve at the same parameter, no less than
+// the next) or from the curve near t (`exact` true: between the neighbouring steps, which a pcurve
+// whose parameter runs ahead of the curve's does not inflate). A face's mesh follows the curve (its
+// boundary nodes are curve points), the face's trim follows the pcurve, so a chord's points lie up
+// to this much farther from the face than from the curve: along the normal (off the surface) or
+// within the surface (outside the trim: gmsh_solid_56 edge 94, 0.019 mm within its tolerance).
 double FaceGap(const Adaptor3d_Surface& surface, const Geom2d_Curve& pcurve, double p0, double p1,
                Curve& curve, double first, double last, int samples, bool exact) {
   double gap = 0;

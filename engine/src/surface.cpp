@@ -198,7 +198,8 @@ class SpanPolynomials {
   // `uknots`, `vknots`: the surface's distinct knots (Surface::uknots.at, vknots.at).
   Vec3 Value(const Geom_BSplineSurface& s, const std::vector<double>& uknots,
              const std::vector<double>& vknots, double u, double v) {
-    const double nu = u_.PeriodicNormalization(u), nv = v_.PeriodicNormalization(v);
+    double nu = u, nv = v;
+    Normalize(&nu, &nv);
     const Span* span = last_;  // consecutive points mostly share a span
     if (!span || !(span->lo_u <= nu && nu < span->hi_u && span->lo_v <= nv && nv < span->hi_v))
       span = last_ = &Find(s, uknots, vknots, nu, nv);
