@@ -1,8 +1,14 @@
 #include "assemble.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <cstring>
+#include <functional>
+#include <iterator>
 #include <utility>
 #include <vector>
+
+#include "parallel.h"
 
 namespace rdmesh {
 
@@ -10,45 +16,46 @@ namespace {
 
 // A boundary node's B-rep identity: a vertex, or an edge and the bits of its parameter.
 struct SharedKey {
-  int dim = 0;
-  int entity = 0;
   uint64_t bits = 0;
-  bool operator==(const SharedKey& o) const {
-    return dim == o.dim && entity == o.entity && bits == o.bits;
-  }
+  uint32_t entity_dim = 0;  // entity id x 2 + dim
+  bool operator==(const SharedKey& o) const { return bits == o.bits && entity_dim == o.entity_dim; }
 };
 
-// Boundary node -> mesh node id: open addressing over one array (a node map of a large model
-// holds a million entries; one allocation instead of one per entry).
+// Boundary node -> mesh node id: open addressing over one array of 16-byte slots (a node map of
+// a large model holds a million entries; one allocation instead of one per entry, and new memory
+// costs a page fault per 4 KiB).
 class SharedNodes {
  public:
+  // Room for `expected` keys at half load; it grows past that.
   explicit SharedNodes(size_t expected) {
     size_t capacity = 16;
     while (capacity < 2 * expected) capacity *= 2;
     slots_.resize(capacity);
   }
   // The id stored for `key`, or `id` after storing it there (second: true) when there is none.
-  std::pair<int64_t, bool> Insert(const SharedKey& key, int64_t id) {
+  std::pair<int64_t, bool> Insert(const SharedKey& key, int32_t id) {
     const size_t mask = slots_.size() - 1;
     for (size_t i = Hash(key) & mask;; i = (i + 1) & mask) {
       Slot& slot = slots_[i];
       if (slot.id < 0) {
-        slot.key = key, slot.id = id;
+        slot.bits = key.bits, slot.entity_dim = key.entity_dim, slot.id = id;
         if (++size_ * 2 > slots_.size()) Grow();
         return {id, true};
       }
-      if (slot.key == key) return {slot.id, false};
+      if (slot.key() == key) return {slot.id, false};
     }
   }
 
  private:
   struct Slot {
-    SharedKey key;
-    int64_t id = -1;
+    uint64_t bits = 0;
+    uint32_t entity_dim = 0;
+    int32_t id = -1;  // mesh node ids are int32 (Mesh::triangles)
+    SharedKey key() const { return {bits, entity_dim}; }
   };
+  static_assert(sizeof(Slot) == 16);
   static size_t Hash(const SharedKey& k) {
-    uint64_t h = k.bits ^ (static_cast<uint64_t>(static_cast<uint32_t>(k.entity)) << 1 |
-                           static_cast<uint64_t>(k.dim));
+    uint64_t h = k.bits ^ k.entity_dim;
     h ^= h >> 33;  // the finaliser of MurmurHash3: parameter bits differ mostly at the bottom
     h *= 0xff51afd7ed558ccdULL;
     h ^= h >> 33;
@@ -62,7 +69,7 @@ class SharedNodes {
     const size_t mask = slots_.size() - 1;
     for (const Slot& s : old) {
       if (s.id < 0) continue;
-      size_t i = Hash(s.key) & mask;
+      size_t i = Hash(s.key()) & mask;
       while (slots_[i].id >= 0) i = (i + 1) & mask;
       slots_[i] = s;
     }
@@ -74,65 +81,106 @@ class SharedNodes {
 }  // namespace
 
 void Assemble(std::vector<FaceMesh>* faces, const std::vector<std::vector<NodeRef>>& refs,
-              Mesh* mesh) {
+              Mesh* mesh, int threads) {
   *mesh = Mesh();
+  const int nf = static_cast<int>(faces->size());
   // Per-triangle deviations only when every assembled face has them.
   bool with_deviation = true;
-  size_t nodes = 0, triangles = 0, boundary = 0;
-  for (size_t fi = 0; fi < faces->size(); ++fi) {
+  size_t boundary = 0;
+  for (int fi = 0; fi < nf; ++fi) {
     const FaceMesh& f = (*faces)[fi];
     if (f.status != FaceStatus::kOk) continue;
     if (f.triangle_deviation.size() != static_cast<size_t>(f.triangle_count()))
       with_deviation = false;
-    nodes += f.node_count();
-    triangles += f.triangle_count();
     for (const NodeRef& r : refs[fi]) boundary += r.dim < 2;
   }
-  SharedNodes shared(boundary);
-  mesh->xyz.reserve(3 * nodes);
-  mesh->node_dim.reserve(nodes);
-  mesh->node_entity.reserve(nodes);
-  mesh->node_param.reserve(2 * nodes);
-  mesh->triangles.reserve(3 * triangles);
-  mesh->triangle_face.reserve(triangles);
-  if (with_deviation) mesh->triangle_deviation.reserve(triangles);
-  for (size_t fi = 0; fi < faces->size(); ++fi) {
+  // 1. Node ids, serially in face order: a node is new unless a boundary node with its B-rep
+  // identity came before it. `fresh` marks the new ones, which take the next id.
+  // Most boundary nodes lie on two faces.
+  SharedNodes shared(boundary / 2);
+  std::vector<std::vector<uint8_t>> fresh(nf);
+  int64_t nodes = 0;
+  for (int fi = 0; fi < nf; ++fi) {
     FaceMesh& f = (*faces)[fi];
     f.global_ids.clear();
     if (f.status != FaceStatus::kOk) continue;
-    f.global_ids.reserve(f.node_count());
+    f.global_ids.resize(f.node_count());
+    fresh[fi].assign(f.node_count(), 1);
     for (int i = 0; i < f.node_count(); ++i) {
       const NodeRef& r = refs[fi][i];
-      int64_t id = mesh->node_count();
       if (r.dim < 2) {
         uint64_t bits = 0;
         if (r.dim == 1) std::memcpy(&bits, &r.t, sizeof bits);
-        auto [known, inserted] = shared.Insert(SharedKey{r.dim, r.entity, bits}, id);
+        const SharedKey key{bits,
+                            static_cast<uint32_t>(r.entity) << 1 | static_cast<uint32_t>(r.dim)};
+        auto [known, inserted] = shared.Insert(key, static_cast<int32_t>(nodes));
         if (!inserted) {
-          f.global_ids.push_back(known);
+          f.global_ids[i] = known;
+          fresh[fi][i] = 0;
           continue;
         }
       }
-      f.global_ids.push_back(id);
-      mesh->xyz.insert(mesh->xyz.end(), {f.xyz[3 * i], f.xyz[3 * i + 1], f.xyz[3 * i + 2]});
-      mesh->node_dim.push_back(static_cast<int8_t>(r.dim));
-      mesh->node_entity.push_back(r.dim == 2 ? f.face_id : r.entity);
-      if (r.dim == 2)
-        mesh->node_param.insert(mesh->node_param.end(), {f.uv[2 * i], f.uv[2 * i + 1]});
-      else
-        mesh->node_param.insert(mesh->node_param.end(), {r.dim == 1 ? r.t : 0.0, 0.0});
-    }
-    for (size_t k = 0; k + 2 < f.triangles.size(); k += 3) {
-      int64_t a = f.global_ids[f.triangles[k]], b = f.global_ids[f.triangles[k + 1]],
-              c = f.global_ids[f.triangles[k + 2]];
-      if (a == b || b == c || c == a) continue;  // collapsed at a pole
-      mesh->triangles.insert(
-          mesh->triangles.end(),
-          {static_cast<int32_t>(a), static_cast<int32_t>(b), static_cast<int32_t>(c)});
-      mesh->triangle_face.push_back(f.face_id);
-      if (with_deviation) mesh->triangle_deviation.push_back(f.triangle_deviation[k / 3]);
+      f.global_ids[i] = nodes++;
     }
   }
+  // 2. Per face, its first triangle (triangles collapsed at a pole are dropped).
+  std::vector<int64_t> first_triangle(nf + 1, 0);
+  const ParallelRunner runner(threads);
+  runner.For(0, nf, [&](int fi) {
+    const FaceMesh& f = (*faces)[fi];
+    if (f.status != FaceStatus::kOk) return;
+    int64_t kept = 0;
+    for (size_t k = 0; k + 2 < f.triangles.size(); k += 3) {
+      const int64_t a = f.global_ids[f.triangles[k]], b = f.global_ids[f.triangles[k + 1]],
+                    c = f.global_ids[f.triangles[k + 2]];
+      kept += a != b && b != c && c != a;
+    }
+    first_triangle[fi + 1] = kept;
+  });
+  for (int fi = 0; fi < nf; ++fi) first_triangle[fi + 1] += first_triangle[fi];
+  // 3. The arrays are sized on all threads: they are new memory, and its first touch costs a
+  // page fault per 4 KiB. Then every face writes its own new nodes and its triangles.
+  const int64_t triangles = first_triangle[nf];
+  const std::function<void()> sizes[] = {
+      [&] { mesh->xyz.resize(3 * nodes); },
+      [&] { mesh->triangles.resize(3 * triangles); },
+      [&] { mesh->node_param.resize(2 * nodes); },
+      [&] { mesh->triangle_deviation.resize(with_deviation ? triangles : 0); },
+      [&] { mesh->triangle_face.resize(triangles); },
+      [&] { mesh->node_entity.resize(nodes); },
+      [&] { mesh->node_dim.resize(nodes); },
+  };
+  runner.For(
+      0, std::size(sizes), [&](int i) { sizes[i](); }, Partition::kOnePerTask);
+  runner.For(0, nf, [&](int fi) {
+    const FaceMesh& f = (*faces)[fi];
+    if (f.status != FaceStatus::kOk) return;
+    for (int i = 0; i < f.node_count(); ++i) {
+      if (!fresh[fi][i]) continue;
+      const NodeRef& r = refs[fi][i];
+      const int64_t id = f.global_ids[i];
+      std::copy_n(&f.xyz[3 * i], 3, &mesh->xyz[3 * id]);
+      mesh->node_dim[id] = static_cast<int8_t>(r.dim);
+      mesh->node_entity[id] = r.dim == 2 ? f.face_id : r.entity;
+      if (r.dim == 2) {
+        mesh->node_param[2 * id] = f.uv[2 * i], mesh->node_param[2 * id + 1] = f.uv[2 * i + 1];
+      } else {
+        mesh->node_param[2 * id] = r.dim == 1 ? r.t : 0.0, mesh->node_param[2 * id + 1] = 0.0;
+      }
+    }
+    int64_t t = first_triangle[fi];
+    for (size_t k = 0; k + 2 < f.triangles.size(); k += 3) {
+      const int64_t a = f.global_ids[f.triangles[k]], b = f.global_ids[f.triangles[k + 1]],
+                    c = f.global_ids[f.triangles[k + 2]];
+      if (a == b || b == c || c == a) continue;  // collapsed at a pole
+      mesh->triangles[3 * t] = static_cast<int32_t>(a);
+      mesh->triangles[3 * t + 1] = static_cast<int32_t>(b);
+      mesh->triangles[3 * t + 2] = static_cast<int32_t>(c);
+      mesh->triangle_face[t] = f.face_id;
+      if (with_deviation) mesh->triangle_deviation[t] = f.triangle_deviation[k / 3];
+      ++t;
+    }
+  });
 }
 
 }  // namespace rdmesh

@@ -225,7 +225,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
 
   // 7. Assemble, in face order.
   if (context) context->ReportProgress({Progress::Stage::kAssembly, total, total});
-  Assemble(&result.faces, refs, &result.mesh);
+  Assemble(&result.faces, refs, &result.mesh, options.threads);
   Summarise(grids, deviation, &result);
   result.summary.seconds = Since(t0);
   if (context) context->ReportProgress({Progress::Stage::kDone, total, total});

@@ -111,5 +111,55 @@ TEST(AssembleTest, TriangleDeviationsOnlyWhenEveryOkFaceHasThem) {
   EXPECT_EQ(mesh.triangle_deviation.size(), 2u);
 }
 
+// A strip of `n` faces; face k has 50 nodes on edge `first + k` (t = 0..49), 50 on the next
+// edge and one interior node. With `shared`, face k's second edge is face k + 1's first.
+void Strip(int n, bool shared, std::vector<FaceMesh>* faces,
+           std::vector<std::vector<NodeRef>>* refs) {
+  for (int k = 0; k < n; ++k) {
+    const int e0 = shared ? k + 1 : 2 * k + 1;
+    std::vector<double> xyz;
+    std::vector<int32_t> triangles;
+    std::vector<NodeRef> r;
+    for (int side = 0; side < 2; ++side)
+      for (int i = 0; i < 50; ++i) {
+        xyz.insert(xyz.end(), {static_cast<double>(i), static_cast<double>(e0 + side), 0.0});
+        r.push_back(OnEdge(e0 + side, i));
+      }
+    xyz.insert(xyz.end(), {25.0, e0 + 0.5, 0.0});
+    r.push_back(Interior());
+    for (int i = 0; i + 1 < 50; ++i) triangles.insert(triangles.end(), {i, i + 1, 100});
+    faces->push_back(Face(k + 1, std::move(xyz), std::move(triangles)));
+    refs->push_back(std::move(r));
+  }
+}
+
+TEST(AssembleTest, ManyFacesGiveTheSameMeshOnAnyThreadCount) {
+  for (bool shared : {true, false}) {
+    SCOPED_TRACE(shared ? "shared edges" : "no edge shared");
+    std::vector<FaceMesh> faces;
+    std::vector<std::vector<NodeRef>> refs;
+    Strip(60, shared, &faces, &refs);
+    Mesh one;
+    Assemble(&faces, refs, &one, 1);
+    const std::vector<int64_t> ids = faces[59].global_ids;
+    // Shared: 61 edges of 50 nodes; apart: 120 (more nodes than the node map starts with room
+    // for); and 60 interior nodes.
+    EXPECT_EQ(one.node_count(), (shared ? 61 : 120) * 50 + 60);
+    EXPECT_EQ(one.triangle_count(), 60 * 49);
+    for (int threads : {2, 3, 0}) {
+      Mesh many;
+      Assemble(&faces, refs, &many, threads);
+      EXPECT_EQ(faces[59].global_ids, ids);
+      EXPECT_EQ(many.xyz, one.xyz);
+      EXPECT_EQ(many.triangles, one.triangles);
+      EXPECT_EQ(many.triangle_face, one.triangle_face);
+      EXPECT_EQ(many.triangle_deviation, one.triangle_deviation);
+      EXPECT_EQ(many.node_dim, one.node_dim);
+      EXPECT_EQ(many.node_entity, one.node_entity);
+      EXPECT_EQ(many.node_param, one.node_param);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rdmesh
