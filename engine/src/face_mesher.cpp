@@ -313,27 +313,41 @@ FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
   return f;
 }
 
+Result<FaceDomain> CopySource(const Model& model, const FacePcurves& pcurves, int rep_id,
+                              const std::vector<EdgeGrid>& grids) {
+  try {
+    std::unique_ptr<Surface> surface =
+        MakeFaceSurface(model.face(rep_id), false, pcurves.Bounds(model, rep_id));
+    FaceDomain domain;
+    if (!BuildFaceDomain(model, pcurves, rep_id, grids, *surface, &domain).ok())
+      return Status(StatusCode::kFaceFailed, "instance boundary differs");
+    return domain;
+  } catch (const Standard_Failure& e) {
+    return Status(StatusCode::kInternal, std::string("OCCT: ") + e.DynamicType()->Name());
+  } catch (const std::exception& e) {
+    return Status(StatusCode::kInternal, e.what());
+  }
+}
+
 FaceMesh PlaceCopy(const Model& model, const FacePcurves& pcurves, int face_id, const FaceMesh& rep,
-                   const std::vector<NodeRef>& rep_refs, const std::vector<EdgeGrid>& grids,
-                   std::vector<NodeRef>* refs) {
+                   const std::vector<NodeRef>& rep_refs, const Result<FaceDomain>& source,
+                   const std::vector<EdgeGrid>& grids, std::vector<NodeRef>* refs) {
   FaceMesh f = rep;
   f.face_id = face_id;
   f.exact_area = model.face_area[face_id - 1];
   *refs = rep_refs;
   if (rep.status != FaceStatus::kOk) return f;
-  const int rep_id = rep.face_id;
   try {
     // Boundary nodes: the copy's own domain lists them in the same order as the
     // representative's (same TShape), with its own exact points and ids.
     std::unique_ptr<Surface> surface =
         MakeFaceSurface(model.face(face_id), false, pcurves.Bounds(model, face_id));
-    FaceDomain mine, theirs;
+    FaceDomain mine;
     Status st = BuildFaceDomain(model, pcurves, face_id, grids, *surface, &mine);
-    std::unique_ptr<Surface> rep_surface =
-        MakeFaceSurface(model.face(rep_id), false, pcurves.Bounds(model, rep_id));
-    if (st.ok()) st = BuildFaceDomain(model, pcurves, rep_id, grids, *rep_surface, &theirs);
-    if (!st.ok() || mine.uv.size() != theirs.uv.size())
+    if (st.ok() && !source.ok()) return Failed(f, source.status().message());
+    if (!st.ok() || mine.uv.size() != source->uv.size())
       return Failed(f, "instance boundary differs");
+    const FaceDomain& theirs = *source;
     const gp_Trsf& trsf = model.face_placement[face_id - 1];
     for (int i = 0; i < f.node_count(); ++i) {
       NodeRef& r = (*refs)[i];

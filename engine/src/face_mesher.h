@@ -12,11 +12,13 @@
 #include "pcurves.h"
 #include "rdmesh/context.h"
 #include "rdmesh/mesh.h"
+#include "rdmesh/status.h"
 
 namespace rdmesh {
 
 class Model;
 class Surface;
+struct FaceDomain;
 
 /// Face evaluators made once and lent to several runs on one model (the levels of detail):
 /// MakeFaceSurface the first time a run asks for a face, a view of that same evaluator after.
@@ -59,10 +61,17 @@ FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
                   const std::vector<EdgeGrid>& grids, const FaceJob& job, Context* context,
                   std::vector<NodeRef>* refs);
 
+/// What a representative's copies match their boundary against (PlaceCopy): the
+/// representative's domain, built once for all its copies. Never throws: a failure comes back as
+/// the copies' reason ("instance boundary differs", or the OCCT exception's).
+Result<FaceDomain> CopySource(const Model& model, const FacePcurves& pcurves, int rep_id,
+                              const std::vector<EdgeGrid>& grids);
+
 /// The mesh of an instanced copy: the representative's interior nodes moved by the placement,
-/// the boundary rebuilt exactly from the copy's own edges.
-FaceMesh PlaceCopy(const Model& model, const FacePcurves& pcurves, int face_id,
-                   const FaceMesh& representative, const std::vector<NodeRef>& representative_refs,
+/// the boundary rebuilt exactly from the copy's own edges. `source` is CopySource of the
+/// representative.
+FaceMesh PlaceCopy(const Model& model, const FacePcurves& pcurves, int face_id, const FaceMesh& rep,
+                   const std::vector<NodeRef>& rep_refs, const Result<FaceDomain>& source,
                    const std::vector<EdgeGrid>& grids, std::vector<NodeRef>* refs);
 
 }  // namespace rdmesh

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "assemble.h"
+#include "face_domain.h"
 #include "face_mesher.h"
 #include "grids.h"
 #include "heal.h"
@@ -139,15 +140,32 @@ Status PlaceInstances(const Model& model, const FacePcurves& pcurves, const Sele
   // The copies in parallel: each task writes its own slot and refs, only reads its
   // representative's, and makes its own evaluators (FaceSurfaces lends a face's to one task at a
   // time). They are reported afterwards, in face order.
-  std::vector<int> copies;
-  for (int f = 1; f <= nf; ++f)
-    if (sel.wanted[f - 1] && model.face_representative[f - 1] != f) copies.push_back(f);
+  std::vector<int> copies, reps;
+  std::vector<int> source_of(nf, -1);  // per representative id - 1: its index in `reps`
+  for (int f = 1; f <= nf; ++f) {
+    const int rep = model.face_representative[f - 1];
+    if (!sel.wanted[f - 1] || rep == f) continue;
+    copies.push_back(f);
+    if ((*faces)[rep - 1].status != FaceStatus::kOk || source_of[rep - 1] >= 0) continue;
+    source_of[rep - 1] = static_cast<int>(reps.size());
+    reps.push_back(rep);
+  }
+  // Each representative's boundary once, then the copies.
+  const Result<FaceDomain> none = Status(StatusCode::kInternal, "instance boundary not built");
+  std::vector<Result<FaceDomain>> sources(reps.size(), none);
   const ParallelRunner runner(threads);
+  runner.For(0, static_cast<int>(reps.size()), [&](int i) {
+    if (Stopped(context)) return;
+    sources[i] = CopySource(model, pcurves, reps[i], grids);
+  });
+  if (Stopped(context)) return context->StopStatus();
   runner.For(0, static_cast<int>(copies.size()), [&](int i) {
     if (Stopped(context)) return;
     const int f = copies[i], rep = model.face_representative[f - 1];
-    (*faces)[f - 1] =
-        PlaceCopy(model, pcurves, f, (*faces)[rep - 1], (*refs)[rep - 1], grids, &(*refs)[f - 1]);
+    const int s = source_of[rep - 1];
+    (*faces)[f - 1] = PlaceCopy(model, pcurves, f, (*faces)[rep - 1], (*refs)[rep - 1],
+                                s >= 0 ? sources[s] : none,  // none: the representative failed
+                                grids, &(*refs)[f - 1]);
   });
   if (Stopped(context)) return context->StopStatus();
   for (int f : copies) reporter->Finished((*faces)[f - 1]);

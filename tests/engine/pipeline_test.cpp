@@ -185,6 +185,41 @@ TEST(PipelineTest, AskingForAPlacedCopyAloneMeshesIt) {
   EXPECT_EQ(r.summary.triangles, 2);
 }
 
+TEST(PipelineTest, PlacedCopiesAreTheirRepresentativeMoved) {
+  // Three placements of one cylinder: faces 4..6 and 7..9 are copies of faces 1..3, and the two
+  // copies of a face match their boundary against one representative domain.
+  TopoDS_Shape cylinder = BRepPrimAPI_MakeCylinder(2.0, 3.0).Shape();
+  TopoDS_Compound three;
+  BRep_Builder builder;
+  builder.MakeCompound(three);
+  for (int k = 0; k < 3; ++k) {
+    gp_Trsf shift;
+    shift.SetTranslation(gp_Vec(10.0 * k, 0, 0));
+    builder.Add(three, cylinder.Moved(TopLoc_Location(shift)));
+  }
+  auto model = LoadShape(three, "three_cylinders");
+  ASSERT_TRUE(model);
+  ASSERT_EQ(GetModelInfo(*model).faces, 9);
+  ASSERT_EQ(GetModelInfo(*model).unique_faces, 3);
+  MeshOptions options;
+  options.max_deviation = 1e-3;
+  MeshResult r = MeshOrDie(*model, options);
+  EXPECT_EQ(OpenAndNonManifoldEdges(r.mesh), std::make_pair(0, 0));
+  for (int f = 4; f <= 9; ++f) {
+    const FaceMesh& copy = r.faces[f - 1];
+    const FaceMesh& rep = r.faces[(f - 1) % 3];
+    ASSERT_EQ(copy.status, FaceStatus::kOk) << copy.reason;
+    EXPECT_EQ(copy.triangles, rep.triangles);
+    ASSERT_EQ(copy.xyz.size(), rep.xyz.size());
+    const double dx = 10.0 * ((f - 1) / 3);
+    for (size_t i = 0; i < copy.xyz.size(); i += 3) {
+      EXPECT_NEAR(copy.xyz[i], rep.xyz[i] + dx, 1e-9);
+      EXPECT_NEAR(copy.xyz[i + 1], rep.xyz[i + 1], 1e-9);
+      EXPECT_NEAR(copy.xyz[i + 2], rep.xyz[i + 2], 1e-9);
+    }
+  }
+}
+
 class CorpusTest : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(CorpusTest, EveryFaceMeshedWatertightOutward) {
