@@ -99,13 +99,20 @@ void MergeCollapsedEdgeVertices(const Model& model, std::vector<EdgeGrid>* grids
 // infinity where that is no tighter than the deviation (which bounds the whole sagitta) or
 // where the face is narrower than the deviation.
 std::vector<double> NarrowFaceLimits(const Model& model, const FacePcurves& pcurves,
-                                     const GridCriteria& gc, const ParallelRunner& runner) {
+                                     const GridCriteria& gc, const std::vector<int>& source,
+                                     const ParallelRunner& runner) {
   const int nf = model.face_count(), ne = model.edge_count();
   std::vector<double> limit(nf, INFINITY);
   if (!(gc.max_deviation > 0) || !(gc.narrow_face_fraction > 0)) return limit;
   const double width = gc.max_deviation / gc.narrow_face_fraction;  // area / perimeter below it
+  // Each TShape's length once, on its first edge id: a rigidly placed copy has that length.
+  auto copied = [&](int e) {
+    return source[e - 1] != e && RigidlyPlaced(model.edge(e)) &&
+           RigidlyPlaced(model.edge(source[e - 1]));
+  };
   std::vector<double> length(ne, 0.0);
   runner.For(1, ne + 1, [&](int e) {
+    if (copied(e)) return;
     const TopoDS_Edge& edge = model.edge(e);
     if (BRep_Tool::Degenerated(edge)) return;
     try {
@@ -116,6 +123,8 @@ std::vector<double> NarrowFaceLimits(const Model& model, const FacePcurves& pcur
       length[e - 1] = 0;
     }
   });
+  for (int e = 1; e <= ne; ++e)
+    if (copied(e)) length[e - 1] = length[source[e - 1] - 1];
   runner.For(1, nf + 1, [&](int f) {
     const TopoDS_Face& face = model.face(f);
     double area = model.face_area[f - 1], perimeter = 0;
@@ -235,15 +244,21 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
   for (int e = 1; e <= ne; ++e)
     source[e - 1] = first.emplace(model.edge(e).TShape().get(), e).first->second;
   const ParallelRunner runner(threads);
-  std::vector<double> factor(ne, 1.0);
-  runner.For(1, ne + 1, [&](int e) {
-    for (int f : model.edge_faces[e - 1])
-      if (!Developable(model.face(f))) factor[e - 1] = gc.curved_face_factor;
+  // Per face id - 1, its representative's kind of surface (a placed copy has the same).
+  std::vector<char> developable(model.face_count());
+  runner.For(1, model.face_count() + 1, [&](int f) {
+    if (model.face_representative[f - 1] == f) developable[f - 1] = Developable(model.face(f));
   });
+  for (int f = 1; f <= model.face_count(); ++f)
+    developable[f - 1] = developable[model.face_representative[f - 1] - 1];
+  std::vector<double> factor(ne, 1.0);
+  for (int e = 1; e <= ne; ++e)
+    for (int f : model.edge_faces[e - 1])
+      if (!developable[f - 1]) factor[e - 1] = gc.curved_face_factor;
   for (int e = 1; e <= ne; ++e)
     factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
 
-  const std::vector<double> narrow = NarrowFaceLimits(model, pcurves, gc, runner);
+  const std::vector<double> narrow = NarrowFaceLimits(model, pcurves, gc, source, runner);
 
   auto build = [&](int e, bool params) {
     if (!edge_needed.empty() && !edge_needed[e - 1] && !params) return;

@@ -123,11 +123,6 @@ FaceLoops LoopsOf(const TopoDS_Face& face, const std::function<UvBounds()>& boun
   return loops;
 }
 
-bool RigidlyPlaced(const TopoDS_Face& face) {
-  const TopLoc_Location& location = face.Location();
-  return location.IsIdentity() || location.Transformation().ScaleFactor() == 1.0;
-}
-
 // A face's own frame: the face without its placement when that is a rigid motion, so that
 // OCCT's lookups, which work in the surface's frame anyway, need not walk the placement's chain
 // of locations (shared by every face of an instance, and by both threads). The same answers:
@@ -228,6 +223,11 @@ void FacePcurves::Release(int threads) {
   const ParallelRunner runner(threads);
   runner.For(0, static_cast<int>(faces_.size()), [&](int i) { faces_[i] = Face(); });
   faces_.clear();
+}
+
+bool RigidlyPlaced(const TopoDS_Shape& shape) {
+  const TopLoc_Location& location = shape.Location();
+  return location.IsIdentity() || location.Transformation().ScaleFactor() == 1.0;
 }
 
 std::pair<TopoDS_Face, TopoDS_Edge> InOwnFrame(const TopoDS_Face& face, const TopoDS_Edge& edge) {

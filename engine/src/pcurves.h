@@ -12,6 +12,7 @@
 #include <Standard_Handle.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Shape.hxx>
 #include <utility>
 #include <vector>
 
@@ -52,6 +53,9 @@ struct FaceLoops {
   std::vector<FaceWire> wires;
   double period_u = 0, period_v = 0;
 };
+
+/// Whether the shape's placement is a rigid motion (no scaling).
+bool RigidlyPlaced(const TopoDS_Shape& shape);
 
 /// `face` and `edge` without the face's placement, when that is a rigid motion and the edge shares
 /// it: OCCT's answers about the edge on the face (its pcurve, whether it is a seam) are the same
