@@ -10,7 +10,9 @@ Per model and tolerance, round by round, alternately `rdmesh mesh MODEL -o tN.ms
 so a change of machine load falls on both), and `cmp` of the two meshes of every round. Reports
 the medians of the meshing wall seconds (`seconds` of the --json report), of the meshing CPU
 seconds (`mesh_cpu_seconds`, all threads) and of the whole process's wall time, the speed-up
-(1-thread seconds / 2-thread seconds), the 1-minute load average before each run, and the cores
+(1-thread seconds / 2-thread seconds) three ways: of the medians, the median of the rounds' own
+ratios (a round's two runs are seconds apart, so a slow spell of the machine falls on both), and
+of the fastest runs (the least disturbed), the 1-minute load average before each run, and the cores
 this script could get: before every round two busy processes spin for 0.5 s, and their CPU seconds
 over the wall seconds say how many cores they had (2.0 = both free). The load average alone does
 not tell: processes of other containers on the same kernel count in it, and the scheduler shares
@@ -78,9 +80,10 @@ def main():
     args = parser.parse_args()
 
     differ = False
-    print("| model | tol | triangles | meshing s, 1 thread | 2 threads | speed-up | CPU s, 1 thread "
-          "| 2 threads | process s, 1 / 2 | load avg | cores free | meshes |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|---|")
+    print("| model | tol | triangles | meshing s, 1 thread | 2 threads | speed-up | of rounds "
+          "| of fastest | CPU s, 1 thread | 2 threads | process s, 1 / 2 | load avg | cores free "
+          "| meshes |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="thread_speedup_") as tmp:
         for model in map(pathlib.Path, args.models):
             for tol in args.tolerances.split(","):
@@ -97,15 +100,20 @@ def main():
                 med = {n: {k: statistics.median(x[k] for x in runs[n])
                            for k in ("seconds", "cpu", "wall")} for n in (1, 2)}
                 loads = [x["load1"] for n in (1, 2) for x in runs[n]]
-                print("| `%s` | %s | %d | %.3f | %.3f | %.2fx | %.3f | %.3f | %.2f / %.2f | "
-                      "%.1f-%.1f | %.2f-%.2f | %s |" % (
+                paired = statistics.median(a["seconds"] / b["seconds"]
+                                           for a, b in zip(runs[1], runs[2]))
+                fastest = (min(x["seconds"] for x in runs[1]) /
+                           min(x["seconds"] for x in runs[2]))
+                print("| `%s` | %s | %d | %.3f | %.3f | %.2fx | %.2fx | %.2fx | %.3f | %.3f | "
+                      "%.2f / %.2f | %.1f-%.1f | %.2f-%.2f | %s |" % (
                           model.name, tol, runs[1][0]["triangles"], med[1]["seconds"],
-                          med[2]["seconds"], med[1]["seconds"] / med[2]["seconds"],
-                          med[1]["cpu"], med[2]["cpu"], med[1]["wall"], med[2]["wall"],
+                          med[2]["seconds"], med[1]["seconds"] / med[2]["seconds"], paired,
+                          fastest, med[1]["cpu"], med[2]["cpu"], med[1]["wall"], med[2]["wall"],
                           min(loads), max(loads), min(cores), max(cores),
                           "identical" if same else "DIFFER"),
                       flush=True)
-    print("%d rounds, medians; %s; %s" % (args.rounds, args.rdmesh,
+    print("%d rounds; speed-up of the medians, median of the rounds' ratios, of the fastest runs; "
+          "%s; %s" % (args.rounds, args.rdmesh,
                                           time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())))
     sys.exit(1 if differ else 0)
 
