@@ -7,7 +7,10 @@ of 1 thread, and the mesh stays byte-identical").
 
 Per model and tolerance, round by round, alternately `rdmesh mesh MODEL -o tN.msh
 --max-deviation-rel TOL --threads N --json -q` with N = 1 and N = 2 (the order flips every round,
-so a change of machine load falls on both), and `cmp` of the two meshes of every round. Reports
+so a change of machine load falls on both), and `cmp` of the two meshes of every round. With
+`--cache` the model is read from a --cache-dir (filled by a first run that is not reported), so
+that the two runs of a round are about a second apart (this machine's speed moves in spells of
+about a minute); but the model read from the cache meshes slower than the parsed one. Reports
 the medians of the meshing wall seconds (`seconds` of the --json report), of the meshing CPU
 seconds (`mesh_cpu_seconds`, all threads) and of the whole process's wall time, the speed-up
 (1-thread seconds / 2-thread seconds) three ways: of the medians, the median of the rounds' own
@@ -56,12 +59,14 @@ def free_cores(seconds=0.5):
     return cpu / seconds
 
 
-def mesh(rdmesh, model, tol, threads, out):
+def mesh(rdmesh, model, tol, threads, out, cache_dir=None):
     load = os.getloadavg()[0]
     start = time.perf_counter()
-    proc = subprocess.run([rdmesh, "mesh", str(model), "-o", str(out), "--max-deviation-rel", tol,
-                           "--threads", str(threads), "--json", "-q"],
-                          capture_output=True, text=True)
+    command = [rdmesh, "mesh", str(model), "-o", str(out), "--max-deviation-rel", tol,
+               "--threads", str(threads), "--json", "-q"]
+    if cache_dir:
+        command += ["--cache-dir", str(cache_dir)]
+    proc = subprocess.run(command, capture_output=True, text=True)
     wall = time.perf_counter() - start
     if proc.returncode != 0:
         raise SystemExit("%s --threads %d failed (%d): %s" % (model, threads, proc.returncode,
@@ -77,6 +82,10 @@ def main():
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--tolerances", default="1e-3,1e-4")
     parser.add_argument("--rdmesh", default=str(ROOT / "build" / "bin" / "rdmesh"))
+    parser.add_argument("--cache", action="store_true",
+                        help="read the model from a --cache-dir that a first, unreported run "
+                             "fills, so a round takes about a second (the cached model meshes "
+                             "slower: see bench/RESULTS.md)")
     args = parser.parse_args()
 
     differ = False
@@ -87,6 +96,9 @@ def main():
     with tempfile.TemporaryDirectory(prefix="thread_speedup_") as tmp:
         for model in map(pathlib.Path, args.models):
             for tol in args.tolerances.split(","):
+                cache = pathlib.Path(tmp) / "cache" if args.cache else None
+                if cache:  # fills the cache; not reported
+                    mesh(args.rdmesh, model, tol, 2, pathlib.Path(tmp) / "warm.msh", cache)
                 runs = {1: [], 2: []}
                 same = True
                 cores = []
@@ -94,7 +106,7 @@ def main():
                     cores.append(free_cores())
                     outs = {n: pathlib.Path(tmp) / ("t%d.msh" % n) for n in (1, 2)}
                     for n in ((1, 2) if r % 2 == 0 else (2, 1)):
-                        runs[n].append(mesh(args.rdmesh, model, tol, n, outs[n]))
+                        runs[n].append(mesh(args.rdmesh, model, tol, n, outs[n], cache))
                     same = same and filecmp.cmp(outs[1], outs[2], shallow=False)
                 differ = differ or not same
                 med = {n: {k: statistics.median(x[k] for x in runs[n])
