@@ -49,18 +49,15 @@ def corpus_models():
     return sorted(p for p in CORPUS.iterdir() if p.suffix.lower() in MODEL_SUFFIXES)
 
 
-def run_once(rdmesh, model, tol, timeout, out_dir):
-    """One meshing run: a dict with the --json fields this script uses, or an 'error'."""
-    out = pathlib.Path(out_dir) / "mesh.msh"
-    command = [rdmesh, "mesh", str(model), "-o", str(out), "--max-deviation-rel", repr(tol),
+def run_mesh(rdmesh, model, tol, timeout, out):
+    """One `rdmesh mesh MODEL -o OUT --max-deviation-rel TOL --threads 1 --json -q` run: its --json
+    report, or a string saying why there is none. `tol` as the command line takes it."""
+    command = [rdmesh, "mesh", str(model), "-o", str(out), "--max-deviation-rel", tol,
                "--threads", "1", "--json", "-q", "--timeout", str(timeout)]
-    load = os.getloadavg()[0]
-    start = time.perf_counter()
     try:
         proc = subprocess.run(command, capture_output=True, text=True, timeout=timeout + 30)
     except subprocess.TimeoutExpired:
-        return {"error": "killed after %g s" % (timeout + 30), "load1": load}
-    wall = time.perf_counter() - start
+        return "killed after %g s" % (timeout + 30)
     lines = proc.stdout.strip().splitlines()
     try:
         report = json.loads(lines[-1]) if lines else {}
@@ -69,9 +66,18 @@ def run_once(rdmesh, model, tol, timeout, out_dir):
     if proc.returncode != 0 or "triangles" not in report:
         message = report.get("error", {}).get("message") if isinstance(report.get("error"),
                                                                         dict) else None
-        return {"error": "exit %d: %s" % (proc.returncode,
-                                          message or proc.stderr.strip()[-300:]),
-                "load1": load}
+        return "exit %d: %s" % (proc.returncode, message or proc.stderr.strip()[-300:])
+    return report
+
+
+def run_once(rdmesh, model, tol, timeout, out_dir):
+    """One meshing run: a dict with the --json fields this script uses, or an 'error'."""
+    load = os.getloadavg()[0]
+    start = time.perf_counter()
+    report = run_mesh(rdmesh, model, repr(tol), timeout, pathlib.Path(out_dir) / "mesh.msh")
+    wall = time.perf_counter() - start
+    if isinstance(report, str):
+        return {"error": report, "load1": load}
     faces = report.get("faces", [])
     return {
         "triangles": report["triangles"],

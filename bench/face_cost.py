@@ -24,31 +24,12 @@ import json
 import math
 import pathlib
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from cost_scaling import ROOT, corpus_models, fit  # noqa: E402
-
-
-def mesh_faces(rdmesh, model, tol, timeout, out):
-    """The --json report's faces of one run, or a string saying why there are none."""
-    command = [rdmesh, "mesh", str(model), "-o", str(out), "--max-deviation-rel", tol,
-               "--threads", "1", "--json", "-q", "--timeout", str(timeout)]
-    try:
-        proc = subprocess.run(command, capture_output=True, text=True, timeout=timeout + 30)
-    except subprocess.TimeoutExpired:
-        return "killed after %g s" % (timeout + 30)
-    lines = proc.stdout.strip().splitlines()
-    try:
-        report = json.loads(lines[-1]) if lines else {}
-    except json.JSONDecodeError:
-        report = {}
-    if proc.returncode != 0 or "faces" not in report:
-        return "exit %d: %s" % (proc.returncode, proc.stderr.strip()[-300:])
-    return report["faces"]
+from cost_scaling import ROOT, corpus_models, fit, run_mesh  # noqa: E402
 
 
 def main():
@@ -68,11 +49,11 @@ def main():
     with tempfile.TemporaryDirectory(prefix="face_cost_") as tmp:
         for tol in tolerances:
             for model in models:
-                got = mesh_faces(args.rdmesh, model, tol, args.timeout, pathlib.Path(tmp) / "m.msh")
+                got = run_mesh(args.rdmesh, model, tol, args.timeout, pathlib.Path(tmp) / "m.msh")
                 if isinstance(got, str):
                     failures.append((model.name, tol, got))
                     continue
-                for f in got:
+                for f in got["faces"]:
                     if f["status"] == "ok" and f["triangles"] > 0 and f["seconds"] > 0:
                         faces[(tol, model.name, f["id"])] = f
 

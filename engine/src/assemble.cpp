@@ -95,8 +95,8 @@ void Assemble(std::vector<FaceMesh>* faces, const std::vector<std::vector<NodeRe
     for (const NodeRef& r : refs[fi]) boundary += r.dim < 2;
   }
   // 1. Node ids, serially in face order: a node is new unless a boundary node with its B-rep
-  // identity came before it. `fresh` marks the new ones, which take the next id.
-  // Most boundary nodes lie on two faces.
+  // identity came before it. `fresh` marks the new ones, which take the next id. The map starts
+  // with room for half the boundary references: most boundary nodes lie on two faces.
   SharedNodes shared(boundary / 2);
   std::vector<std::vector<uint8_t>> fresh(nf);
   int64_t nodes = 0;
