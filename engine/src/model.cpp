@@ -1,8 +1,11 @@
 #include "model.h"
 
 #include <BRepGProp.hxx>
+#include <BRepLib.hxx>
 #include <BRep_Tool.hxx>
 #include <GProp_GProps.hxx>
+#include <Geom_Plane.hxx>
+#include <Geom_RectangularTrimmedSurface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -126,6 +129,29 @@ std::string InnermostReason(const std::string& message) {
   return last;
 }
 
+// Stores the pcurve of every edge of a plane that has none. OCCT answers BRep_Tool::CurveOnSurface
+// for such an edge by projecting its 3D curve onto the plane anew at every call (BRep_Tool::
+// CurveOnPlane), which each meshing run asked several times per edge (pcurves, the face's (u,v)
+// bounds, edge lines); BRepLib stores that same projection, so every later answer is the same
+// curve, looked up. An edge OCCT cannot project is left as it is: a run asks again, and fails
+// the face as before.
+void StorePlanePcurves(Model* model) {
+  for (int f = 1; f <= model->face_count(); ++f) {
+    const TopoDS_Face& face = model->face(f);
+    TopLoc_Location location;
+    Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
+    if (auto trimmed = Handle(Geom_RectangularTrimmedSurface)::DownCast(surface))
+      surface = trimmed->BasisSurface();
+    if (Handle(Geom_Plane)::DownCast(surface).IsNull()) continue;
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+      try {
+        BRepLib::BuildPCurveForEdgeOnPlane(TopoDS::Edge(ex.Current()), face);
+      } catch (const Standard_Failure&) {
+      }
+    }
+  }
+}
+
 // Model::face_edges and Model::edge_faces.
 void MapAdjacency(Model* model) {
   const int nf = model->face_count();
@@ -158,6 +184,7 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
     if (model->faces.IsEmpty())
       return Status(StatusCode::kEmptyModel, "'" + name + "' holds no faces");
     MapAdjacency(model.get());
+    StorePlanePcurves(model.get());
     FindInstances(model.get());
     if (derived != nullptr &&
         derived->face_area.size() != static_cast<std::size_t>(model->face_count())) {

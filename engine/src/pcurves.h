@@ -2,8 +2,9 @@
 // The pcurves of a run's faces, looked up once: each face's wires in walking order with the
 // pcurves of their edges, its (u,v) bounds, and the pcurve of any of its edges, in parallel,
 // before the edge grids. OCCT answers BRep_Tool::CurveOnSurface for an edge of a plane that stores
-// no pcurve by projecting the edge's curve anew, BRepTools::UVBounds asks that of every edge of
-// the face, and BRepTools_WireExplorer maps the wire's vertices; the edge grids, healing and each
+// no pcurve by projecting the edge's curve anew (a loaded model stores them: StorePlanePcurves in
+// model.cpp), BRepTools::UVBounds asks for every edge's pcurve of the face, and
+// BRepTools_WireExplorer maps the wire's vertices; the edge grids, healing and each
 // face's domain asked all this several times per face and edge, and with two threads the
 // reference counts of the locations those lookups copy were shared by both (bench/RESULTS.md,
 // "Pcurves looked up once").

@@ -18,10 +18,13 @@
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <GProp_GProps.hxx>
+#include <Geom2d_Curve.hxx>
+#include <Geom_Plane.hxx>
 #include <IGESControl_Writer.hxx>
 #include <STEPCAFControl_Writer.hxx>
 #include <TDataStd_Name.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 #include <XCAFApp_Application.hxx>
@@ -194,6 +197,44 @@ TEST_F(ModelTest, InstancedPartIsMeshedOnce) {
     EXPECT_NEAR(m.face_placement[id - 1].TranslationPart().X(), 100.0, 1e-9);
   }
   EXPECT_EQ(representatives, 6);
+}
+
+// Every edge of a plane holds its pcurve once loaded, and it is the projection OCCT would
+// otherwise compute at every lookup (BRep_Tool::CurveOnPlane), at the same parameters.
+TEST_F(ModelTest, PlaneEdgesHoldTheirProjectedPcurves) {
+  for (const char* name : {"nist_mbe_pmi_11.stp", "cq_red_cube_blue_cylinder.step"}) {
+    auto model = LoadModel(DataPath(name));
+    ASSERT_TRUE(model.ok()) << model.status().ToString();
+    const Model& m = **model;
+    int plane_edges = 0;
+    for (int f = 1; f <= m.face_count(); ++f) {
+      const TopoDS_Face& face = m.face(f);
+      TopLoc_Location location;
+      Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
+      if (Handle(Geom_Plane)::DownCast(surface).IsNull()) continue;
+      for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+        const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+        if (BRep_Tool::Degenerated(edge)) continue;
+        ++plane_edges;
+        double first = 0, last = 0;
+        bool stored = false;
+        Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last, &stored);
+        ASSERT_FALSE(pcurve.IsNull()) << name << " face " << f;
+        EXPECT_TRUE(stored) << name << " face " << f;
+        double pf = 0, pl = 0;
+        Handle(Geom2d_Curve) projected = BRep_Tool::CurveOnPlane(edge, surface, location, pf, pl);
+        ASSERT_FALSE(projected.IsNull()) << name << " face " << f;
+        EXPECT_EQ(first, pf);
+        EXPECT_EQ(last, pl);
+        for (int k = 0; k <= 4; ++k) {
+          const double t = first + (last - first) * k / 4.0;
+          EXPECT_EQ(pcurve->Value(t).X(), projected->Value(t).X()) << name << " face " << f;
+          EXPECT_EQ(pcurve->Value(t).Y(), projected->Value(t).Y()) << name << " face " << f;
+        }
+      }
+    }
+    EXPECT_GT(plane_edges, 10) << name;
+  }
 }
 
 TEST_F(ModelTest, BrepAndIgesFiles) {
