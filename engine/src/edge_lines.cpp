@@ -5,6 +5,8 @@
 // between the nodes of the edge's vertices), so a mesh rebuilt from a remote run, which carries
 // the classification but not the edge grids, gives the same lines as the run itself.
 
+#include "edge_lines.h"
+
 #include <BRep_Tool.hxx>
 #include <Geom2d_Curve.hxx>
 #include <Geom_Surface.hxx>
@@ -30,16 +32,14 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// The outward unit normal of one face beside an edge, along the edge's pcurve on it. The pcurve
-// and surface are looked up once: on a plane without a stored pcurve, OCCT projects the edge's
-// curve at every lookup.
+// The outward unit normal of one face beside an edge, along the edge's pcurve on it (from the
+// run's table), the surface looked up once.
 class FaceNormalOnEdge {
  public:
-  FaceNormalOnEdge(const TopoDS_Face& face, const TopoDS_Edge& edge) {
+  FaceNormalOnEdge(const FacePcurves& pcurves, int face_id, const TopoDS_Face& face, int edge_id,
+                   const TopoDS_Edge& edge) {
     try {
-      double first, last;
-      const auto [own_face, own_edge] = InOwnFrame(face, edge);
-      pcurve_ = BRep_Tool::CurveOnSurface(own_edge, own_face, first, last);
+      pcurve_ = pcurves.Find(face_id, face, edge_id, edge).curve;
       // The bare surface: an adaptor would first compute the face's (u,v) bounds.
       surface_ = BRep_Tool::Surface(face, location_);
       reversed_ = face.Orientation() == TopAbs_REVERSED;
@@ -75,11 +75,12 @@ class FaceNormalOnEdge {
 
 // Largest angle (degrees) between the faces' exact normals over the curve parameters `ts` (the
 // edge's nodes); -1 when a normal is undefined at every parameter.
-double Dihedral(const Model& model, const TopoDS_Edge& edge, const std::vector<int32_t>& faces,
+double Dihedral(const Model& model, const FacePcurves& pcurves, int edge_id,
+                const TopoDS_Edge& edge, const std::vector<int32_t>& faces,
                 const std::vector<double>& ts) {
   double largest = -1.0;
   std::vector<FaceNormalOnEdge> sides;
-  for (int32_t f : faces) sides.emplace_back(model.face(f), edge);
+  for (int32_t f : faces) sides.emplace_back(pcurves, f, model.face(f), edge_id, edge);
   std::vector<gp_Dir> normals;
   for (double t : ts) {
     normals.clear();
@@ -119,6 +120,12 @@ std::optional<int32_t> VertexNode(const Model& model, const Mesh& mesh,
 
 Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mesh,
                                              double sharp_angle, int threads) {
+  return BuildEdgeLines(model, mesh, sharp_angle, threads, FacePcurves());  // all from OCCT
+}
+
+Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mesh,
+                                             double sharp_angle, int threads,
+                                             const FacePcurves& pcurves) {
   const int64_t nodes = mesh.node_count();
   if (mesh.node_dim.size() != static_cast<size_t>(nodes) ||
       mesh.node_entity.size() != static_cast<size_t>(nodes) ||
@@ -158,8 +165,7 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
       for (int f : model.edge_faces[e - 1]) {  // each once, ascending
         line.faces.push_back(f);
         any_meshed = any_meshed || meshed[f];
-        const auto [own_face, own_edge] = InOwnFrame(model.face(f), edge);
-        line.seam = line.seam || BRep_Tool::IsClosed(own_edge, own_face);
+        line.seam = line.seam || pcurves.IsSeam(f, model.face(f), e, edge);
       }
       if (!any_meshed) return;
 
@@ -185,7 +191,7 @@ Result<std::vector<EdgeLine>> BuildEdgeLines(const Model& model, const Mesh& mes
         std::vector<double> ts = {first_t};
         for (const auto& [t, node] : inner) ts.push_back(t);
         ts.push_back(last_t);
-        line.dihedral = Dihedral(model, edge, line.faces, ts);
+        line.dihedral = Dihedral(model, pcurves, e, edge, line.faces, ts);
       }
       const bool free = line.faces.size() == 1 && !line.seam && !line.degenerate;
       line.sharp = free || line.dihedral > sharp_angle;

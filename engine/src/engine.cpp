@@ -1,6 +1,6 @@
 // MeshModel, the facade: validate the options, resolve the deviation, dispatch to the pipeline
-// (pipeline.h: one run at one deviation) or to the triangle budget (budget.h: several runs), then
-// add the edge lines.
+// (pipeline.h: one run at one deviation, which builds the edge lines too) or to the triangle budget
+// (budget.h: several runs, the edge lines built here for the one kept).
 #include "rdmesh/engine.h"
 
 #include <utility>
@@ -26,9 +26,10 @@ Result<MeshResult> MeshModelWith(const Model& model, const MeshOptions& options,
   if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
   double deviation = options.max_deviation > 0 ? options.max_deviation
                                                : options.max_deviation_rel * model.info.diagonal;
-  Result<MeshResult> result = options.max_triangles > 0
-                                  ? MeshWithinBudget(model, options, context)
-                                  : MeshAtDeviation(model, options, deviation, context, surfaces);
+  if (options.max_triangles <= 0)
+    return MeshAtDeviation(model, options, deviation, context, surfaces,
+                           RunOutput::kMeshAndEdgeLines);
+  Result<MeshResult> result = MeshWithinBudget(model, options, context);
   if (!result.ok()) return result;
   Result<std::vector<EdgeLine>> edges =
       BuildEdgeLines(model, result->mesh, options.sharp_edge_angle, options.threads);

@@ -257,6 +257,14 @@ Pcurve FacePcurves::Find(int face_id, const TopoDS_Face& face, int edge_id,
   return FromOcct(face, edge);
 }
 
+bool FacePcurves::IsSeam(int face_id, const TopoDS_Face& face, int edge_id,
+                         const TopoDS_Edge& edge) const {
+  if (const Face* f = Built(face_id))
+    for (const Entry& e : f->entries)
+      if (e.eid == edge_id) return !e.either;
+  return BRep_Tool::IsClosed(edge, face);
+}
+
 const std::vector<int>* FacePcurves::Rim(int face_id) const {
   const Face* f = Built(face_id);
   return f ? &f->rim : nullptr;

@@ -85,6 +85,10 @@ class FacePcurves {
   /// picks a seam's side, as in OCCT).
   Pcurve Find(int face_id, const TopoDS_Face& face, int edge_id, const TopoDS_Edge& edge) const;
 
+  /// BRep_Tool::IsClosed(edge, face): whether the edge is a seam of the face (arguments as for
+  /// Find).
+  bool IsSeam(int face_id, const TopoDS_Face& face, int edge_id, const TopoDS_Edge& edge) const;
+
   /// BRepTools::UVBounds of face `face_id`.
   UvBounds Bounds(const Model& model, int face_id) const;
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "assemble.h"
+#include "edge_lines.h"
 #include "face_domain.h"
 #include "face_mesher.h"
 #include "grids.h"
@@ -205,7 +206,7 @@ void Summarise(const std::vector<EdgeGrid>& grids, double deviation, MeshResult*
 }  // namespace
 
 Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& options, double deviation,
-                                   Context* context, FaceSurfaces* surfaces) {
+                                   Context* context, FaceSurfaces* surfaces, RunOutput output) {
   auto t0 = Clock::now();
   MeshResult result;
   result.faces.resize(model.face_count());
@@ -239,13 +240,20 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
                       &result.faces, &refs);
   if (!st.ok()) return st;
   result.summary.face_seconds = Since(t1);
-  pcurves.Release(options.threads);
 
   // 7. Assemble, in face order.
   if (context) context->ReportProgress({Progress::Stage::kAssembly, total, total});
   Assemble(&result.faces, refs, &result.mesh, options.threads);
   Summarise(grids, deviation, &result);
   result.summary.seconds = Since(t0);
+  // 8. Edge lines, from the pcurve table (not counted in the seconds, as before).
+  if (output == RunOutput::kMeshAndEdgeLines) {
+    Result<std::vector<EdgeLine>> edges =
+        BuildEdgeLines(model, result.mesh, options.sharp_edge_angle, options.threads, pcurves);
+    if (!edges.ok()) return edges.status();
+    result.edges = std::move(*edges);
+  }
+  pcurves.Release(options.threads);
   if (context) context->ReportProgress({Progress::Stage::kDone, total, total});
   return result;
 }

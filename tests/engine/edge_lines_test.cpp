@@ -180,17 +180,29 @@ TEST(FaceNormalsTest, ExactAtEveryNodePolesIncluded) {
   EXPECT_GE(poles, 2);
 }
 
+// The lines BuildEdgeLines makes from the mesh alone, asking OCCT for every pcurve and seam, are
+// the run's own (built from its pcurve table), bit for bit.
+void ExpectRebuiltLinesSame(const Model& model, const MeshResult& r) {
+  auto again = BuildEdgeLines(model, r.mesh);
+  ASSERT_TRUE(again.ok()) << again.status().ToString();
+  ASSERT_EQ(again->size(), r.edges.size());
+  for (size_t i = 0; i < r.edges.size(); ++i) {
+    const EdgeLine &a = (*again)[i], &b = r.edges[i];
+    EXPECT_EQ(a.edge_id, b.edge_id);
+    EXPECT_EQ(a.nodes, b.nodes) << "edge " << b.edge_id;
+    EXPECT_EQ(a.faces, b.faces) << "edge " << b.edge_id;
+    EXPECT_EQ(a.seam, b.seam) << "edge " << b.edge_id;
+    EXPECT_EQ(a.degenerate, b.degenerate) << "edge " << b.edge_id;
+    EXPECT_EQ(a.sharp, b.sharp) << "edge " << b.edge_id;
+    EXPECT_EQ(a.dihedral, b.dihedral) << "edge " << b.edge_id;
+  }
+}
+
 TEST(EdgeLinesTest, RebuiltFromTheMeshAlone) {
   auto model = LoadShape(BRepPrimAPI_MakeCylinder(5.0, 10.0).Shape(), "edge_rebuilt");
   ASSERT_TRUE(model);
   MeshResult r = MeshOrDie(*model);
-  auto again = BuildEdgeLines(*model, r.mesh);
-  ASSERT_TRUE(again.ok()) << again.status().ToString();
-  ASSERT_EQ(again->size(), r.edges.size());
-  for (size_t i = 0; i < r.edges.size(); ++i) {
-    EXPECT_EQ((*again)[i].nodes, r.edges[i].nodes);
-    EXPECT_EQ((*again)[i].faces, r.edges[i].faces);
-  }
+  ExpectRebuiltLinesSame(*model, r);
   Mesh unclassified = r.mesh;
   unclassified.node_param.clear();
   EXPECT_EQ(BuildEdgeLines(*model, unclassified).status().code(), StatusCode::kInternal);
@@ -214,6 +226,7 @@ TEST_P(EdgeLinesCorpusTest, EveryEdgeOnceOnSharedNodes) {
   MeshResult r = MeshOrDie(**model);
   ExpectConsistentEdgeLines(**model, r);
   EXPECT_FALSE(r.edges.empty());
+  ExpectRebuiltLinesSame(**model, r);
 }
 
 // Test names are the parameter index: 0 nist_mbe_pmi_11, 1 cq_red_cube_blue_cylinder, ...
