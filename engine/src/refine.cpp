@@ -488,6 +488,7 @@ Status RefineFace(WorkMesh* mesh, Surface& surface, const FaceCriteria& criteria
   Refiner refiner(*mesh, surface, criteria, scale_u, scale_v, context, stats);
   Status st = refiner.RefineToCriteria(max_triangles, settle_rounds);
   if (!st.ok()) return st;
+  stats->refined_triangles = mesh->TriangleCount();
   if (improve) {
     st = refiner.Improve();
     if (!st.ok()) return st;

@@ -28,9 +28,10 @@ struct RefineStats {
   int64_t flips = 0;
   int64_t collapses = 0;
   int64_t moves = 0;
-  bool budget_hit = false;   ///< stopped at the triangle cap
-  double max_violation = 0;  ///< worst triangle afterwards (<= 1: all criteria met)
-  double max_deviation = 0;  ///< worst estimated deviation afterwards, model units
+  bool budget_hit = false;        ///< stopped at the triangle cap
+  int64_t refined_triangles = 0;  ///< triangles after the splits, before the improvement passes
+  double max_violation = 0;       ///< worst triangle afterwards (<= 1: all criteria met)
+  double max_deviation = 0;       ///< worst estimated deviation afterwards, model units
   /// 1 per working-mesh triangle (dead ones 0): its estimated deviation afterwards, model units.
   std::vector<double> deviation;
 };
