@@ -2,7 +2,7 @@
 """1 thread against 2 on the largest corpus models (issue 13: "2 threads give >= 1.8x the speed
 of 1 thread, and the mesh stays byte-identical").
 
-    /usr/bin/python3 bench/thread_speedup.py [--rounds 5] [--tolerances 1e-3,1e-4]
+    /usr/bin/python3 bench/thread_speedup.py [--rounds 5] [--tolerances 1e-3,1e-4] [--in-process]
         [--rdmesh build/bin/rdmesh] [MODEL ...]
 
 Per model and tolerance, round by round, alternately `rdmesh mesh MODEL -o tN.msh
@@ -21,6 +21,11 @@ over the wall seconds say how many cores they had (2.0 = both free). The load av
 not tell: processes of other containers on the same kernel count in it, and the scheduler shares
 the cores between containers, whatever the nice level. A wall-clock speed-up means something only
 when the cores were near 2.0. Exits 1 when a pair of meshes differs.
+
+With `--in-process`, `build/bin/thread_pairs` (bench/thread_pairs.cpp) does the work instead: the
+model loaded once, `--rounds` pairs of one- and two-thread meshes per tolerance a fraction of a
+second apart in one process (a warm rdmeshd's case), every mesh compared bit for bit with the
+first.
 """
 
 import argparse
@@ -76,17 +81,53 @@ def mesh(rdmesh, model, tol, threads, out, cache_dir=None):
             "load1": load, "triangles": report["triangles"]}
 
 
+def in_process(args):
+    """--in-process: thread_pairs per model; one row per model and tolerance. Returns the exit
+    code (1 when a mesh differed)."""
+    differ = False
+    print("| model | tol | triangles | meshing s, 1 thread | 2 threads | speed-up | of pairs "
+          "| of fastest | CPU s, 1 thread | 2 threads | cores free | meshes |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|")
+    for model in map(pathlib.Path, args.models):
+        cores = free_cores()
+        proc = subprocess.run([args.thread_pairs, str(model), "--tolerances", args.tolerances,
+                               "--pairs", str(args.rounds)], capture_output=True, text=True)
+        if proc.returncode not in (0, 1):
+            raise SystemExit("%s: thread_pairs failed (%d): %s" % (model, proc.returncode,
+                                                                   proc.stderr.strip()))
+        for line in proc.stdout.strip().splitlines():
+            r = json.loads(line)
+            differ = differ or not r["identical"]
+            print("| `%s` | %g | %d | %.3f | %.3f | %.2fx | %.2fx | %.2fx | %.3f | %.3f | %.2f | "
+                  "%s |" % (model.name, r["tolerance"], r["triangles"], r["one_thread_seconds"],
+                            r["two_thread_seconds"], r["speedup_of_medians"],
+                            r["speedup_median_of_pairs"], r["speedup_of_fastest"],
+                            r["one_thread_cpu"], r["two_thread_cpu"], cores,
+                            "identical" if r["identical"] else "DIFFER"), flush=True)
+    print("%d pairs in one process; speed-up of the medians, median of the pairs' ratios, of the "
+          "fastest runs; %s; %s" % (args.rounds, args.thread_pairs,
+                                    time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())))
+    return 1 if differ else 0
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("models", nargs="*", default=[str(CORPUS / m) for m in DEFAULT_MODELS])
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--tolerances", default="1e-3,1e-4")
     parser.add_argument("--rdmesh", default=str(ROOT / "build" / "bin" / "rdmesh"))
+    parser.add_argument("--in-process", action="store_true",
+                        help="run build/bin/thread_pairs instead: the model loaded once, pairs of "
+                             "one- and two-thread meshes a fraction of a second apart in one "
+                             "process (--rounds pairs per tolerance)")
+    parser.add_argument("--thread-pairs", default=str(ROOT / "build" / "bin" / "thread_pairs"))
     parser.add_argument("--cache", action="store_true",
                         help="read the model from a --cache-dir that a first, unreported run "
                              "fills, so a round takes about a second (the cached model meshes "
                              "slower: see bench/RESULTS.md)")
     args = parser.parse_args()
+    if args.in_process:
+        sys.exit(in_process(args))
 
     differ = False
     print("| model | tol | triangles | meshing s, 1 thread | 2 threads | speed-up | of rounds "
