@@ -25,6 +25,19 @@ def children(pid):
     return found
 
 
+def waits_in_open(pid):
+    """Whether `pid` sleeps in open(2) on a FIFO that has no writer yet."""
+    proc = pathlib.Path("/proc/%d" % pid)
+    try:
+        state = (proc / "stat").read_text().rsplit(")", 1)[1].split()[0]
+        wchan = (proc / "wchan").read_text().strip()
+        if wchan == "0":  # a kernel that hides wait channels: the system call's number, x86-64
+            return state == "S" and (proc / "syscall").read_text().split()[0] in ("2", "257")
+    except (OSError, IndexError):
+        return False
+    return state == "S" and wchan == "wait_for_partner"
+
+
 @pytest.fixture
 def stuck_run(cli, tmp_path):
     """Starts `rdmesh ARGS` on a FIFO model (the run waits in loading); yields a function
@@ -43,6 +56,11 @@ def stuck_run(cli, tmp_path):
             assert time.monotonic() < deadline, "rdmesh started no child process"
             time.sleep(0.02)
         [child] = children(process.pid)
+        # A signal that comes before the child reaches open(2) ends it through the cancelled
+        # Context, which is another path than the one the tests mean to take.
+        while not waits_in_open(child):
+            assert time.monotonic() < deadline, "the child never waited in open(2) on the model"
+            time.sleep(0.02)
         return process, child
 
     yield start
