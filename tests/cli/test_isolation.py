@@ -12,12 +12,17 @@ import time
 import pytest
 
 
+def stat_fields(stat):
+    """The fields of a /proc/PID/stat file after the command name: state, parent pid, ..."""
+    return stat.read_text().rsplit(")", 1)[1].split()
+
+
 def children(pid):
     """Pids of the live processes whose parent is `pid`."""
     found = []
     for stat in pathlib.Path("/proc").glob("[0-9]*/stat"):
         try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
+            fields = stat_fields(stat)
         except OSError:
             continue
         if int(fields[1]) == pid and fields[0] != "Z":
@@ -29,7 +34,7 @@ def waits_in_open(pid):
     """Whether `pid` sleeps in open(2) on a FIFO that has no writer yet."""
     proc = pathlib.Path("/proc/%d" % pid)
     try:
-        state = (proc / "stat").read_text().rsplit(")", 1)[1].split()[0]
+        state = stat_fields(proc / "stat")[0]
         wchan = (proc / "wchan").read_text().strip()
         if wchan == "0":  # a kernel that hides wait channels: the system call's number, x86-64
             return state == "S" and (proc / "syscall").read_text().split()[0] in ("2", "257")
