@@ -200,9 +200,16 @@ class SpanPolynomials {
              const std::vector<double>& vknots, double u, double v) {
     double nu = u, nv = v;
     Normalize(&nu, &nv);
-    const Span* span = last_;  // consecutive points mostly share a span
-    if (!span || !(span->lo_u <= nu && nu < span->hi_u && span->lo_v <= nv && nv < span->hi_v))
-      span = last_ = &Find(s, uknots, vknots, nu, nv);
+    // Consecutive points mostly share a span, or fall in the one before it (samples on either
+    // side of a knot line): the last two are tried first.
+    auto holds = [nu, nv](const Span* sp) {
+      return sp && sp->lo_u <= nu && nu < sp->hi_u && sp->lo_v <= nv && nv < sp->hi_v;
+    };
+    const Span* span = last_;
+    if (!holds(span)) {
+      span = holds(previous_) ? previous_ : &Find(s, uknots, vknots, nu, nv);
+      previous_ = last_, last_ = span;
+    }
     // Parameters local to the span: BSplSLib centres it, with half its length as unit.
     double lu = (nu - span->start_u) / span->half_u;
     double lv = (nv - span->start_v) / span->half_v;
@@ -251,7 +258,7 @@ class SpanPolynomials {
                          s.VKnotSequence(), s.Poles(), s.Weights(), coeffs);
     coeffs_.insert(coeffs_.end(), &coeffs(1, 1), &coeffs(1, 1) + size_);
     spans_.push_back(span);
-    last_ = nullptr;  // spans_ may have moved
+    last_ = previous_ = nullptr;  // spans_ may have moved
     return spans_.back();
   }
 
@@ -326,6 +333,7 @@ class SpanPolynomials {
   std::unordered_map<uint64_t, size_t> index_;  // (u span, v span) -> spans_ index
   std::vector<double> coeffs_;
   const Span* last_ = nullptr;
+  const Span* previous_ = nullptr;  // the one last_ held before
 };
 
 // OCCT evaluator, with speed-ups that keep OCCT's values bit for bit. B-spline points come from
