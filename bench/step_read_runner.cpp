@@ -1,5 +1,5 @@
 // step_read_runner: the plain OpenCASCADE STEP read that rdmesh's model load is compared with
-// (bench/load_cost.py, issue 14 part 3).
+// (bench/performance/load_cost.py, issue 14 part 3).
 //
 //   step_read_runner MODEL.step
 //

@@ -9,9 +9,9 @@
 // reported, then `--pairs` pairs of MeshModel runs, one with options.threads = 1 and one with 2,
 // the order flipping every pair. The two runs of a pair are a fraction of a second apart, so a
 // change of the machine's speed (this VM's moves by up to 40% in spells of about a minute) falls
-// on both; separate processes (bench/thread_speedup.py) are seconds apart and see the model's
-// first mesh in a process. This is the warm rdmeshd's case: one process meshing a loaded model
-// again and again.
+// on both; separate processes (bench/performance/thread_speedup.py) are seconds apart and see
+// the model's first mesh in a process. This is the warm rdmeshd's case: one process meshing a
+// loaded model again and again.
 //
 // Timed: MeshSummary::seconds (edge grids, faces and assembly; what `rdmesh mesh --json` reports
 // as `seconds`) and the process's CPU seconds over the run. Every mesh is compared with the first

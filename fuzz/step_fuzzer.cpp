@@ -1,5 +1,5 @@
 // libFuzzer target: the model reader on arbitrary bytes taken as a STEP file.
-// Built with -DRDMESH_FUZZ=ON and clang (scripts/fuzz_smoke.sh, bench/fuzz_long.sh).
+// Built with -DRDMESH_FUZZ=ON and clang (scripts/fuzz_smoke.sh, bench/robustness/fuzz_long.sh).
 // RDMESH_FUZZ_LAST_INPUT=FILE writes each input to FILE before it runs: a fault inside OCCT while
 // its own signal handlers are installed kills the process before libFuzzer can save the input.
 

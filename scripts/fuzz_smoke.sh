@@ -20,7 +20,7 @@
 #
 # The CLI is ${RDMESH_CLI:-build/bin/rdmesh} (scripts/test.sh builds it first).
 # RDMESH_FUZZ_ARGS adds libFuzzer flags; RDMESH_FUZZ_CORPUS_SEEDS=1 adds the corpus models
-# (bench/fuzz_long.sh); RDMESH_FUZZ_BUILD_DIR moves the build.
+# (bench/robustness/fuzz_long.sh); RDMESH_FUZZ_BUILD_DIR moves the build.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 build="${RDMESH_FUZZ_BUILD_DIR:-$top/build-fuzz}"

@@ -2,7 +2,7 @@
 """What levels of detail in one run cost (issue 15 item 4: 3 watertight levels for less than
 1.6x the time of the finest alone).
 
-    /usr/bin/python3 bench/lod_cost.py [--runs 5] [--lod 1e-2,1e-3,1e-4] [MODEL.step ...]
+    /usr/bin/python3 bench/performance/lod_cost.py [--runs 5] [--lod 1e-2,1e-3,1e-4] [MODEL.step ...]
 
 For each model, round by round, in turn: `rdmesh mesh MODEL --lod LEVELS` (one process: the
 model read once, one mesh per level), the finest level alone (`--max-deviation-rel FINEST`), and
@@ -24,7 +24,7 @@ import subprocess
 import tempfile
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 CORPUS = ROOT.parent / "shared" / "corpus"
 DEFAULT_MODELS = [CORPUS / "nist_mbe_pmi_2.stp", CORPUS / "nist_ctc_02_asme1_ap242.stp",
                   ROOT / "tests" / "data" / "nist_mbe_pmi_11.stp"]

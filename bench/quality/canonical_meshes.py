@@ -2,9 +2,9 @@
 """Meshes models with two rdmesh binaries and compares the results: triangle counts, failed
 faces, estimated deviation, and whether the .msh files are byte-identical. Written to measure
 what the canonical load (every model read back from OCCT's binary form, see
-engine/src/model.h ParseCanonical) changes in today's meshes.
+engine/src/model/model.h ParseCanonical) changes in today's meshes.
 
-  bench/canonical_meshes.py --before OLD/rdmesh --after build/bin/rdmesh MODEL... [-- MESH_FLAGS]
+  bench/quality/canonical_meshes.py --before OLD/rdmesh --after build/bin/rdmesh MODEL... [-- MESH_FLAGS]
 
 Prints one Markdown table row per model; both runs use the same flags (default: the defaults)."""
 

@@ -6,7 +6,7 @@ time of the load inside the process) and of the process CPU time (user + system,
 process start), and their ratios. With --baseline OLD_RDMESH, also the parse of another binary
 (e.g. one without the canonical load, to measure what canonicalisation costs).
 
-  bench/store_load.py [--rdmesh build/bin/rdmesh] [--runs 3] [--baseline OLD] MODEL...
+  bench/performance/store_load.py [--rdmesh build/bin/rdmesh] [--runs 3] [--baseline OLD] MODEL...
 
 Default models: voron_bowden_module and gmsh_tough_second_order from /work/shared/corpus."""
 

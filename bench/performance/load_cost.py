@@ -2,7 +2,7 @@
 """What rdmesh's model load costs against a plain OCCT STEP read of the same file, in one run
 (issue 14 part 3: within 1.2x).
 
-    /usr/bin/python3 bench/load_cost.py [--runs 3] [MODEL.step ...]
+    /usr/bin/python3 bench/performance/load_cost.py [--runs 3] [MODEL.step ...]
 
 For each model, alternately: `rdmesh info MODEL --json` in one process (RDMESH_NO_FORK=1; our
 load: STEPCAFControl_Reader with names, colours and layers, the pre-checks, the canonical binary
@@ -21,7 +21,7 @@ import statistics
 import subprocess
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 CORPUS = ROOT.parent / "shared" / "corpus"
 DEFAULT_MODELS = [CORPUS / "voron_bowden_module.step", CORPUS / "gmsh_tough_second_order.step"]
 

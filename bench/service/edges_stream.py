@@ -2,8 +2,8 @@
 """What ReturnFields.edges (or another optional field, --field) costs on the wire: the Mesh
 stream's bytes and wall time without and with it, against a running rdmeshd.
 
-    bench/edges_stream.py --address 127.0.0.1:50051 MODEL.step [--runs 2]
-    bench/edges_stream.py --field triangle_deviation MODEL.step
+    bench/service/edges_stream.py --address 127.0.0.1:50051 MODEL.step [--runs 2]
+    bench/service/edges_stream.py --field triangle_deviation MODEL.step
 """
 
 import argparse
@@ -11,7 +11,7 @@ import os
 import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "clients",
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "clients",
                                 "python"))
 from rdmesh import Client  # noqa: E402
 

@@ -3,7 +3,7 @@
 three rdmeshd replicas and nginx on loopback, configured as tests/python/test_routing.py does
 (deploy/nginx/rdmesh-grpc.conf with local `server` lines).
 
-    /usr/bin/python3 bench/routing.py [--models A.step B.step] [--rounds 15] [--rel 1e-3]
+    /usr/bin/python3 bench/service/routing.py [--models A.step B.step] [--rounds 15] [--rel 1e-3]
 
 Per model:
   - 20 Mesh calls by unknown ids through nginx: the NOT_FOUND round trip that a client's first
@@ -26,7 +26,7 @@ import time
 
 import grpc
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
+REPO = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "clients" / "python"))
 sys.path.insert(0, str(REPO / "tests" / "python"))
 from conftest import Daemon  # noqa: E402

@@ -2,7 +2,7 @@
 """Measures what crash isolation costs a client: the latency of Mesh calls on a cached model,
 through one rdmeshd or another (e.g. a build from before the worker processes), in one run.
 
-    /usr/bin/python3 bench/isolation_latency.py \
+    /usr/bin/python3 bench/service/isolation_latency.py \
         --daemon before=/path/to/old/rdmeshd --daemon after=build/bin/rdmeshd \
         [--models tests/data/cq_red_cube_blue_cylinder.step ../shared/corpus/nist_mbe_pmi_2.stp]
         [--rounds 15] [--rel 1e-3]
@@ -26,7 +26,7 @@ import sys
 import tempfile
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
+REPO = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "clients" / "python"))
 from rdmesh import Client  # noqa: E402
 

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Meshes every corpus model with rdmesh and scores it with the yardstick.
 
-Usage: bench/corpus_eval.py [--rdmesh build/bin/rdmesh] [--rel 1e-3] [--out DIR] [MODEL...]
+Usage: bench/quality/corpus_eval.py [--rdmesh build/bin/rdmesh] [--rel 1e-3] [--out DIR] [MODEL...]
 
 For each model: `rdmesh mesh MODEL -o DIR/NAME.msh --max-deviation-rel REL --json`, then
 `meshbench eval MODEL DIR/NAME.msh`. Prints one row per model with flags for what misses the bar
@@ -16,18 +16,18 @@ import subprocess
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "shared"))
+SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "..", "shared"))
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--rdmesh", default=os.path.join(HERE, "..", "build", "bin", "rdmesh"))
+    ap.add_argument("--rdmesh", default=os.path.join(HERE, "..", "..", "build", "bin", "rdmesh"))
     ap.add_argument("--rel", type=float, default=1e-3, help="--max-deviation-rel (default 1e-3)")
     ap.add_argument("--out", default="/tmp/rdmesh-corpus", help="directory for meshes and JSON")
     ap.add_argument("models", nargs="*", help="default: every ../shared/corpus/*.st*p")
     a = ap.parse_args()
     # The shared yardstick may be read-only: scripts/yardstick.sh builds a copy to run.
-    built = subprocess.run(["sh", os.path.join(HERE, "..", "scripts", "yardstick.sh")], check=True,
+    built = subprocess.run(["sh", os.path.join(HERE, "..", "..", "scripts", "yardstick.sh")], check=True,
                            capture_output=True, text=True).stdout.strip().splitlines()[-1]
     meshbench = os.path.join(built, "meshbench")
     models = a.models or sorted(glob.glob(os.path.join(SHARED, "corpus", "*.st*p")))

@@ -9,9 +9,9 @@ Python client, and prints how many ended with each exit code / gRPC status, how 
 signal (crashes) and how many outlived --timeout by 30 s (hangs; for the daemon, calls that
 ended at their own gRPC deadline of --timeout + 30 s are counted apart).
 
-    /usr/bin/python3 bench/fuzz_mutants.py -n 200 --seed 1
-    /usr/bin/python3 bench/fuzz_mutants.py -n 100 --daemon start      # starts build/bin/rdmeshd
-    /usr/bin/python3 bench/fuzz_mutants.py -n 100 --daemon 127.0.0.1:50051 --no-cli
+    /usr/bin/python3 bench/robustness/fuzz_mutants.py -n 200 --seed 1
+    /usr/bin/python3 bench/robustness/fuzz_mutants.py -n 100 --daemon start      # starts build/bin/rdmeshd
+    /usr/bin/python3 bench/robustness/fuzz_mutants.py -n 100 --daemon 127.0.0.1:50051 --no-cli
 
 Exit status 1 when any CLI run crashed or hung (or the daemon died), else 0.
 """
@@ -30,7 +30,7 @@ import tempfile
 import threading
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 DEFAULT_SEEDS = sorted(ROOT.glob("tests/data/*.st*p"))
 REF = re.compile(rb"#(\d+)")
 RECORD = re.compile(rb"^\s*#(\d+)\s*=\s*([A-Z0-9_]*)", re.M)

@@ -3,11 +3,11 @@
 issue 12: the daemon never restarts or drops a connection, every request ends with OK or a
 documented status, and the well-formed jobs all complete byte-identical to the local CLI.
 
-    /usr/bin/python3 bench/fuzz_daemon.py [-n 10000] [--seed 1] [--jobs 3] [--timeout 10]
+    /usr/bin/python3 bench/robustness/fuzz_daemon.py [-n 10000] [--seed 1] [--jobs 3] [--timeout 10]
                                           [--clients 8] [--client-pause 5]
                                           [--rdmeshd build/bin/rdmeshd] [--cli build/bin/rdmesh]
 
-Starts rdmeshd on loopback, runs `bench/fuzz_mutants.py -n N --daemon ADDRESS --no-cli --jobs J`
+Starts rdmeshd on loopback, runs `bench/robustness/fuzz_mutants.py -n N --daemon ADDRESS --no-cli --jobs J`
 (J mutants in flight: each an upload and a mesh at 1e-3 of the diagonal with `timeout_seconds`
 --timeout), and meanwhile --clients threads that each loop `rdmesh mesh MODEL -o OUT.msh --remote
 ADDRESS` over the bundled models, --client-pause seconds apart, and compare the file with a local
@@ -27,7 +27,7 @@ import tempfile
 import threading
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "clients" / "python"))
 from rdmesh import Client  # noqa: E402
 
@@ -96,7 +96,7 @@ def main():
     for thread in threads:
         thread.start()
     start = time.monotonic()
-    fuzz = subprocess.run([sys.executable, str(ROOT / "bench" / "fuzz_mutants.py"), "-n",
+    fuzz = subprocess.run([sys.executable, str(ROOT / "bench" / "robustness" / "fuzz_mutants.py"), "-n",
                            str(args.count), "--seed", str(args.seed), "--daemon", address,
                            "--no-cli", "--jobs", str(args.jobs), "--timeout", str(args.timeout),
                            "--progress", "500"], stdout=subprocess.PIPE, text=True)

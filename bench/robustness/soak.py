@@ -2,7 +2,7 @@
 """Soak: concurrent clients against one rdmeshd for minutes, with some hostile files among the
 models, sampling the daemon's and its workers' memory. Measures; asserts nothing.
 
-    /usr/bin/python3 bench/soak.py [--minutes 10] [--clients 8] [--fuzz-every 5]
+    /usr/bin/python3 bench/robustness/soak.py [--minutes 10] [--clients 8] [--fuzz-every 5]
                                    [--daemon build/bin/rdmeshd | --address HOST:PORT]
                                    [--models a.step b.stp ...] [--json out.json]
 
@@ -29,7 +29,7 @@ import tempfile
 import threading
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
+REPO = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "clients" / "python"))
 import grpc  # noqa: E402
 from rdmesh import Client, RdmeshError  # noqa: E402

@@ -2,8 +2,8 @@
 """Meshing time against output triangles over the corpus, on log-log axes (issue 13: "cost per
 output triangle should not grow with model size ... a slope near 1 is the aim").
 
-    /usr/bin/python3 bench/cost_scaling.py [--tolerances 1e-3,1e-4] [--runs 1] [--time cpu]
-        [--rdmesh build/bin/rdmesh] [--timeout 300] [--out bench/cost_scaling] [MODEL ...]
+    /usr/bin/python3 bench/performance/cost_scaling.py [--tolerances 1e-3,1e-4] [--runs 1] [--time cpu]
+        [--rdmesh build/bin/rdmesh] [--timeout 300] [--out bench/performance/cost_scaling] [MODEL ...]
 
 Meshes every model of /work/shared/corpus (or the models given) at each relative tolerance with
 `rdmesh mesh MODEL -o OUT.msh --max-deviation-rel TOL --threads 1 --json -q`, one run at a time.
@@ -40,7 +40,7 @@ import sys
 import tempfile
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 CORPUS = pathlib.Path("/work/shared/corpus")
 MODEL_SUFFIXES = {".step", ".stp", ".iges", ".igs", ".brep"}
 
@@ -118,7 +118,7 @@ def main():
     parser.add_argument("--rdmesh", default=str(ROOT / "build" / "bin" / "rdmesh"))
     parser.add_argument("--timeout", type=float, default=300)
     parser.add_argument("--outlier", type=float, default=2.0)
-    parser.add_argument("--out", default=str(ROOT / "bench" / "cost_scaling"))
+    parser.add_argument("--out", default=str(ROOT / "bench" / "performance" / "cost_scaling"))
     args = parser.parse_args()
 
     models = [pathlib.Path(m) for m in args.models] or corpus_models()
@@ -186,7 +186,7 @@ def main():
     loads = [x["load1"] for results in runs.values() for x in results]
     load = {"min": min(loads), "median": statistics.median(loads), "max": max(loads)}
 
-    command = " ".join(["/usr/bin/python3", "bench/cost_scaling.py"] + sys.argv[1:])
+    command = " ".join(["/usr/bin/python3", "bench/performance/cost_scaling.py"] + sys.argv[1:])
     summary = {
         "command": command,
         "per_run": "%s mesh MODEL -o OUT.msh --max-deviation-rel TOL --threads 1 --json -q "

@@ -3,7 +3,7 @@
 field but `load_seconds` compared exactly, and both load times. For load-path changes that must
 not change what is loaded (the bounding box and diagonal set every relative deviation).
 
-    /usr/bin/python3 bench/compare_info.py --before OLD/rdmesh --after NEW/rdmesh [MODEL ...]
+    /usr/bin/python3 bench/quality/compare_info.py --before OLD/rdmesh --after NEW/rdmesh [MODEL ...]
 
 Default models: tests/data and ../shared/corpus. Exits 1 when any model differs.
 """
@@ -14,7 +14,7 @@ import pathlib
 import subprocess
 import sys
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def info(binary, model):

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Where a mesh of the unit sphere spends its triangles, from the exact sphere.
 
-  /usr/bin/python3 bench/sphere_stats.py MESH.msh TOL
+  /usr/bin/python3 bench/quality/sphere_stats.py MESH.msh TOL
 
 TOL is the --max-deviation-rel the mesh was made at (of the diagonal 2 sqrt(3)). For each
 triangle: its deviation from the sphere (at the circumcentre when that lies inside, else at the

@@ -7,9 +7,9 @@
 #   build-fuzz/bin/step_fuzzer -minimize_crash=1 -runs=2000 FILE
 # (for OCCT's stack overflows, which kill the process before libFuzzer sees them, remove lines by
 # hand while `RDMESH_NO_FORK=1 build/bin/rdmesh info FILE` still dies).
-#   bench/fuzz_long.sh [MINUTES]      default 30
+#   bench/robustness/fuzz_long.sh [MINUTES]      default 30
 set -euo pipefail
-top=$(cd "$(dirname "$0")/.." && pwd)
+top=$(cd "$(dirname "$0")/../.." && pwd)
 minutes="${1:-30}"
 build="${RDMESH_FUZZ_BUILD_DIR:-$top/build-fuzz}"
 mkdir -p "$build/artifacts"

@@ -2,7 +2,7 @@
 """1 thread against 2 on the largest corpus models (issue 13: "2 threads give >= 1.8x the speed
 of 1 thread, and the mesh stays byte-identical").
 
-    /usr/bin/python3 bench/thread_speedup.py [--rounds 5] [--tolerances 1e-3,1e-4] [--in-process]
+    /usr/bin/python3 bench/performance/thread_speedup.py [--rounds 5] [--tolerances 1e-3,1e-4] [--in-process]
         [--rdmesh build/bin/rdmesh] [MODEL ...]
 
 Per model and tolerance, round by round, alternately `rdmesh mesh MODEL -o tN.msh
@@ -40,7 +40,7 @@ import sys
 import tempfile
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 CORPUS = pathlib.Path("/work/shared/corpus")
 DEFAULT_MODELS = ["voron_bowden_module.step", "gmsh_tough_second_order.step", "nist_mbe_pmi_2.stp"]
 

@@ -2,7 +2,7 @@
 """Cost per output triangle face by face (issue 13: "cost per output triangle should not grow
 with model size").
 
-    /usr/bin/python3 bench/face_cost.py [--tolerances 1e-3,1e-4,3e-5] [--min-triangles 20]
+    /usr/bin/python3 bench/performance/face_cost.py [--tolerances 1e-3,1e-4,3e-5] [--min-triangles 20]
         [--rdmesh build/bin/rdmesh] [--timeout 300] [--out OUT.json] [MODEL ...]
 
 Meshes every model of /work/shared/corpus (or the models given) once per relative tolerance with
