@@ -7,12 +7,12 @@
 #include <memory>
 #include <vector>
 
-#include "cdt.h"
-#include "edge_grid.h"
-#include "measure.h"
-#include "operations.h"
-#include "refine.h"
-#include "surface.h"
+#include "boundary/edge_discretize.h"
+#include "face/cdt.h"
+#include "face/measure.h"
+#include "face/refine.h"
+#include "face/work_mesh.h"
+#include "geometry/surface.h"
 
 namespace rdmesh::testing {
 

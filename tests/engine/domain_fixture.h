@@ -18,11 +18,11 @@
 #include <memory>
 #include <vector>
 
-#include "face_domain.h"
-#include "grids.h"
-#include "model.h"
-#include "pcurves.h"
-#include "surface.h"
+#include "boundary/edge_grids.h"
+#include "boundary/face_domain.h"
+#include "boundary/pcurves.h"
+#include "geometry/surface.h"
+#include "model/model.h"
 
 namespace rdmesh::testing {
 

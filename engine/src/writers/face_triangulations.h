@@ -9,7 +9,7 @@
 #include <mutex>
 #include <vector>
 
-#include "model.h"
+#include "model/model.h"
 #include "rdmesh/mesh.h"
 
 namespace rdmesh {

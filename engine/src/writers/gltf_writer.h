@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "model.h"
+#include "model/model.h"
 #include "rdmesh/mesh.h"
 #include "rdmesh/status.h"
 

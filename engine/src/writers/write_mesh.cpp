@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "model.h"
+#include "model/model.h"
 #include "rdmesh/engine.h"
 #include "writers/gltf_writer.h"
 #include "writers/msh_writer.h"

@@ -1,0 +1,331 @@
+#include "boundary/edge_grids.h"
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRep_Tool.hxx>
+#include <Geom2d_Curve.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Vertex.hxx>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "boundary/edge_discretize.h"
+#include "boundary/pcurves.h"
+#include "core/parallel.h"
+#include "geometry/surface.h"
+#include "geometry/surface_type.h"
+#include "model/model.h"
+
+namespace rdmesh {
+
+namespace {
+
+bool Developable(const TopoDS_Face& face) {
+  SurfaceType type = FaceSurfaceType(face);
+  return type == SurfaceType::kPlane || type == SurfaceType::kCylinder ||
+         type == SurfaceType::kCone || type == SurfaceType::kExtrusion;
+}
+
+// Polyline samples that decide whether an edge is shorter than its tolerance.
+constexpr int kLengthSamples = 8;
+// Polyline samples of an edge's length in a face's perimeter (for its width).
+constexpr int kWidthSamples = 16;
+// Parameter steps at which an edge's curve is compared with its faces: a first look, and where
+// that finds a gap, a finer one (a gap may peak over a few hundredths of the edge: gmsh_solid_56
+// edge 94).
+constexpr int kGapSamples = 8;
+constexpr int kFineGapSamples = 64;
+// Golden-section steps of CurveDistance: its interval shrinks by 0.618 a step.
+constexpr int kCurveDistanceSteps = 20;
+// A gap below this fraction of the deviation leaves the edge's budget as it is (well within the
+// slack of a measured deviation; meshes stay the same where edges lie on their faces).
+constexpr double kGapIgnored = 0.01;
+// Where a gap leaves less, the chords still get this fraction of the deviation (a gap of up to
+// 0.95 of it then puts the mesh up to 1.05 of it off the face, where the chords would need
+// ever more segments to do better).
+constexpr double kMinChordShare = 0.05;
+
+// The length of the polyline through `samples` + 1 even parameter steps of [f, l].
+double PolylineLength(Curve& curve, double f, double l, int samples) {
+  double length = 0;
+  Vec3 prev = curve.Point(f);
+  for (int k = 1; k <= samples; ++k) {
+    Vec3 x = curve.Point(f + (l - f) * k / samples);
+    length += Dist(prev, x);
+    prev = x;
+  }
+  return length;
+}
+
+// The two vertices of a collapsed (non-degenerate, shorter than tolerance) edge are one node:
+// every grid names the smallest vertex id of its group and takes that vertex's point, so all
+// faces share one node there and triangles across the collapsed edge vanish.
+void MergeCollapsedEdgeVertices(const Model& model, std::vector<EdgeGrid>* grids) {
+  const int nv = model.vertices.Extent();
+  std::vector<int> parent(nv + 1);
+  for (int v = 0; v <= nv; ++v) parent[v] = v;
+  auto find = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  bool any = false;
+  for (int e = 1; e <= model.edge_count(); ++e) {
+    const EdgeGrid& g = (*grids)[e - 1];
+    if (!g.degenerate || g.first_vertex == g.last_vertex || BRep_Tool::Degenerated(model.edge(e)))
+      continue;
+    int a = find(g.first_vertex), b = find(g.last_vertex);
+    if (a == b) continue;
+    parent[std::max(a, b)] = std::min(a, b);
+    any = true;
+  }
+  if (!any) return;
+  for (EdgeGrid& g : *grids) {
+    if (g.t.empty()) continue;
+    g.first_vertex = find(g.first_vertex);
+    g.last_vertex = find(g.last_vertex);
+    auto point = [&](int v) {
+      gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(model.vertices(v)));
+      return Vec3{p.X(), p.Y(), p.Z()};
+    };
+    if (!g.xyz.empty()) g.xyz.front() = point(g.first_vertex), g.xyz.back() = point(g.last_vertex);
+  }
+}
+
+// Per face id - 1: the largest tangential sagitta its edges' chords may have,
+// narrow_face_fraction x area / perimeter (seams and degenerate edges are no boundary), or
+// infinity where that is no tighter than the deviation (which bounds the whole sagitta) or
+// where the face is narrower than the deviation.
+std::vector<double> NarrowFaceLimits(const Model& model, const FacePcurves& pcurves,
+                                     const GridCriteria& gc, const std::vector<int>& source,
+                                     const ParallelRunner& runner) {
+  const int nf = model.face_count(), ne = model.edge_count();
+  std::vector<double> limit(nf, INFINITY);
+  if (!(gc.max_deviation > 0) || !(gc.narrow_face_fraction > 0)) return limit;
+  const double width = gc.max_deviation / gc.narrow_face_fraction;  // area / perimeter below it
+  // Each TShape's length once, on its first edge id: a rigidly placed copy has that length.
+  auto copied = [&](int e) {
+    return source[e - 1] != e && RigidlyPlaced(model.edge(e)) &&
+           RigidlyPlaced(model.edge(source[e - 1]));
+  };
+  std::vector<double> length(ne, 0.0);
+  runner.For(1, ne + 1, [&](int e) {
+    if (copied(e)) return;
+    const TopoDS_Edge& edge = model.edge(e);
+    if (BRep_Tool::Degenerated(edge)) return;
+    try {
+      double t0, t1;
+      BRep_Tool::Range(edge, t0, t1);
+      length[e - 1] = PolylineLength(*MakeEdgeCurve(edge), t0, t1, kWidthSamples);
+    } catch (const Standard_Failure&) {
+      length[e - 1] = 0;
+    }
+  });
+  for (int e = 1; e <= ne; ++e)
+    if (copied(e)) length[e - 1] = length[source[e - 1] - 1];
+  runner.For(1, nf + 1, [&](int f) {
+    const TopoDS_Face& face = model.face(f);
+    double area = model.face_area[f - 1], perimeter = 0;
+    if (const std::vector<int>* rim = pcurves.Rim(f)) {
+      for (int e : *rim) perimeter += length[e - 1];
+    } else {
+      for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+        const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+        if (!BRep_Tool::IsClosed(edge, face)) perimeter += length[model.edges.FindIndex(edge) - 1];
+      }
+    }
+    // Narrower than the deviation, a face is not resolved at all: it may stand as a line.
+    if (perimeter > 0 && area / perimeter < width && area / perimeter >= gc.max_deviation)
+      limit[f - 1] = gc.narrow_face_fraction * area / perimeter;
+  });
+  return limit;
+}
+
+// The faces beside an edge whose limit is below `max_sagitta`, as EdgeGrid sides: each holds
+// its own surface evaluator and pcurve (one thread uses them).
+std::vector<EdgeSide> NarrowSides(const Model& model, const FacePcurves& pcurves, int edge_id,
+                                  const TopoDS_Edge& edge, const std::vector<int>& faces,
+                                  const std::vector<double>& limit, double max_sagitta) {
+  std::vector<EdgeSide> sides;
+  for (int f : faces) {
+    if (!(limit[f - 1] < max_sagitta)) continue;
+    const TopoDS_Face& face = model.face(f);
+    Handle(Geom2d_Curve) pcurve = pcurves.Find(f, face, edge_id, edge).curve;
+    if (pcurve.IsNull()) continue;
+    std::shared_ptr<Surface> surface = MakeFaceSurface(face, false, pcurves.Bounds(model, f));
+    sides.push_back({[surface, pcurve](double t) {
+                       gp_Pnt2d q = pcurve->Value(t);
+                       return surface->Normal(q.X(), q.Y());
+                     },
+                     limit[f - 1]});
+  }
+  return sides;
+}
+
+// The distance from x to the curve over [a, b], where it has one minimum (golden section).
+double CurveDistance(Curve& curve, Vec3 x, double a, double b) {
+  constexpr double kInvPhi = 0.6180339887498949;
+  double best = std::min(Dist(curve.Point(a), x), Dist(curve.Point(b), x));
+  double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
+  double fc = Dist(curve.Point(c), x), fd = Dist(curve.Point(d), x);
+  for (int k = 0; k < kCurveDistanceSteps; ++k) {
+    if (fc < fd) {
+      b = d, d = c, fd = fc;
+      c = b - kInvPhi * (b - a), fc = Dist(curve.Point(c), x);
+    } else {
+      a = c, c = d, fc = fd;
+      d = a + kInvPhi * (b - a), fd = Dist(curve.Point(d), x);
+    }
+  }
+  return std::min({best, fc, fd});
+}
+
+// How far the edge's 3D curve lies from one face's boundary, at `samples` + 1 even parameter steps:
+// the largest distance of S(p(t)), the point of the face's pcurve (kept within the surface's own
+// range: IntoSurfaceRange), from C(t) (`exact` false: the curve at the same parameter, no less than
+// the next) or from the curve near t (`exact` true: between the neighbouring steps, which a pcurve
+// whose parameter runs ahead of the curve's does not inflate). A face's mesh follows the curve (its
+// boundary nodes are curve points), the face's trim follows the pcurve, so a chord's points lie up
+// to this much farther from the face than from the curve: along the normal (off the surface) or
+// within the surface (outside the trim: gmsh_solid_56 edge 94, 0.019 mm within its tolerance).
+double FaceGap(const Adaptor3d_Surface& surface, const Geom2d_Curve& pcurve, double p0, double p1,
+               Curve& curve, double first, double last, int samples, bool exact) {
+  double gap = 0;
+  auto param = [&](int k) { return first + (last - first) * std::clamp(k, 0, samples) / samples; };
+  for (int k = 0; k <= samples; ++k) {
+    const double t = param(k);
+    // (A pcurve's range is the curve's on a same-parameter edge; else mapped linearly.)
+    const double tp = p0 == first && p1 == last ? t : p0 + (p1 - p0) * k / samples;
+    const gp_Pnt2d q = pcurve.Value(tp);
+    const Vec2 uv = IntoSurfaceRange(surface, {q.X(), q.Y()});
+    const gp_Pnt s = surface.Value(uv.x, uv.y);
+    const Vec3 x{s.X(), s.Y(), s.Z()};
+    const double d =
+        exact ? CurveDistance(curve, x, param(k - 1), param(k + 1)) : Dist(curve.Point(t), x);
+    if (std::isfinite(d)) gap = std::max(gap, d);
+  }
+  return gap;
+}
+
+// The largest FaceGap over the edge's faces that have a pcurve: a first look at kGapSamples
+// steps, and on a face where that finds more than `ignored`, a finer one.
+double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, int edge_id,
+                   const TopoDS_Edge& edge, Curve& curve, double first, double last,
+                   const std::vector<int>& faces, double ignored) {
+  double gap = 0;
+  for (int f : faces) {
+    const TopoDS_Face& face = model.face(f);
+    const Pcurve found = pcurves.Find(f, face, edge_id, edge);
+    const Handle(Geom2d_Curve)& pcurve = found.curve;
+    const double p0 = found.first, p1 = found.last;
+    if (pcurve.IsNull()) continue;
+    // OCCT's adaptor (the face's placement applied): a handful of points, no tables to build.
+    const BRepAdaptor_Surface surface(face, false);
+    double g = FaceGap(surface, *pcurve, p0, p1, curve, first, last, kGapSamples, false);
+    if (g > ignored)
+      g = FaceGap(surface, *pcurve, p0, p1, curve, first, last, kFineGapSamples, true);
+    gap = std::max(gap, g);
+  }
+  return gap;
+}
+
+}  // namespace
+
+Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const GridCriteria& gc,
+                      int threads, const std::vector<bool>& edge_needed, Context* context,
+                      std::vector<EdgeGrid>* grids) {
+  const int ne = model.edge_count();
+  grids->assign(ne, EdgeGrid());
+  // The first edge id of each TShape computes the parameters; the others copy them.
+  std::vector<int> source(ne);
+  std::unordered_map<const void*, int> first;
+  for (int e = 1; e <= ne; ++e)
+    source[e - 1] = first.emplace(model.edge(e).TShape().get(), e).first->second;
+  const ParallelRunner runner(threads);
+  // Per face id - 1, its representative's kind of surface (a placed copy has the same).
+  std::vector<char> developable(model.face_count());
+  runner.For(1, model.face_count() + 1, [&](int f) {
+    if (model.face_representative[f - 1] == f) developable[f - 1] = Developable(model.face(f));
+  });
+  for (int f = 1; f <= model.face_count(); ++f)
+    developable[f - 1] = developable[model.face_representative[f - 1] - 1];
+  std::vector<double> factor(ne, 1.0);
+  for (int e = 1; e <= ne; ++e)
+    for (int f : model.edge_faces[e - 1])
+      if (!developable[f - 1]) factor[e - 1] = gc.curved_face_factor;
+  for (int e = 1; e <= ne; ++e)
+    factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
+
+  const std::vector<double> narrow = NarrowFaceLimits(model, pcurves, gc, source, runner);
+
+  auto build = [&](int e, bool params) {
+    if (!edge_needed.empty() && !edge_needed[e - 1] && !params) return;
+    EdgeGrid& g = (*grids)[e - 1];
+    try {
+      TopoDS_Edge edge = TopoDS::Edge(model.edge(e).Oriented(TopAbs_FORWARD));
+      TopoDS_Vertex v0, v1;
+      TopExp::Vertices(edge, v0, v1);
+      g.first_vertex = model.vertices.FindIndex(v0);
+      g.last_vertex = model.vertices.FindIndex(v1);
+      double f, l;
+      BRep_Tool::Range(edge, f, l);
+      g.degenerate = BRep_Tool::Degenerated(edge);
+      std::unique_ptr<Curve> curve = MakeEdgeCurve(edge);
+      if (params) {
+        if (g.degenerate || !curve) {
+          g.t = {f, l};
+        } else {
+          EdgeGridCriteria c;
+          c.max_sagitta = gc.max_deviation * factor[e - 1];
+          // Where the curve lies off its faces, its chords get what the gap leaves of the
+          // deviation. A gap at or above the deviation leaves nothing: the face cannot meet it
+          // (face_mesher.cpp reports the B-rep), and the grid keeps its budget.
+          const double ignored = kGapIgnored * gc.max_deviation;
+          const std::vector<int>& faces = model.edge_faces[e - 1];
+          const double gap =
+              ignored > 0 ? EdgeFaceGap(model, pcurves, e, edge, *curve, f, l, faces, ignored) : 0;
+          if (gap > ignored && gap < gc.max_deviation)
+            c.max_sagitta = std::min(
+                c.max_sagitta, std::max(gc.max_deviation - gap, kMinChordShare * gc.max_deviation));
+          c.rd_tolerance = gc.rd_tolerance;
+          c.max_length = gc.max_length;
+          c.min_length = std::max(gc.min_length, BRep_Tool::Tolerance(edge));
+          // A closed edge, or one whose ends nearly meet, starts from three segments: its
+          // end-to-end chord says nothing about its length.
+          Vec3 start = curve->Point(f), end = curve->Point(l), mid = curve->Point(0.5 * (f + l));
+          bool loops = g.first_vertex == g.last_vertex || Dist(start, end) < 0.5 * Dist(start, mid);
+          c.min_segments = loops ? 3 : 1;
+          c.sides = NarrowSides(model, pcurves, e, edge, faces, narrow, c.max_sagitta);
+          g.t = DiscretizeCurve(*curve, f, l, c, context);
+          // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
+          // and faces see it as a pole segment (its pcurve may still span the face).
+          if (PolylineLength(*curve, f, l, kLengthSamples) <= BRep_Tool::Tolerance(edge))
+            g.t = {f, l}, g.degenerate = true;
+        }
+      } else {
+        g.t = (*grids)[source[e - 1] - 1].t;
+      }
+      g.xyz.clear();
+      for (double t : g.t) g.xyz.push_back(curve ? curve->Point(t) : Vec3{});
+    } catch (const Standard_Failure&) {
+      g.t.clear();  // the faces on this edge fail with "edge N has no grid"
+    }
+  };
+  std::vector<int> sources, copies;
+  for (int e = 1; e <= ne; ++e) (source[e - 1] == e ? sources : copies).push_back(e);
+  runner.For(0, static_cast<int>(sources.size()), [&](int i) {
+    if (context && context->ShouldStop()) return;
+    build(sources[i], true);
+  });
+  runner.For(0, static_cast<int>(copies.size()), [&](int i) {
+    if (context && context->ShouldStop()) return;
+    build(copies[i], false);
+  });
+  if (context && context->ShouldStop()) return context->StopStatus();
+  MergeCollapsedEdgeVertices(model, grids);
+  return Status::Ok();
+}
+
+}  // namespace rdmesh

@@ -1,0 +1,503 @@
+#include "boundary/face_domain.h"
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRep_Tool.hxx>
+#include <Standard_Failure.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Vertex.hxx>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "model/model.h"
+
+namespace rdmesh {
+
+namespace {
+
+Vec3 VertexPoint(const Model& model, int vertex_id) {
+  gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(model.vertices(vertex_id)));
+  return {p.X(), p.Y(), p.Z()};
+}
+
+double SegmentDistance2(Vec2 p, Vec2 a, Vec2 b) {
+  Vec2 ab = b - a, ap = p - a;
+  double l2 = ab.x * ab.x + ab.y * ab.y;
+  double t = l2 > 0 ? std::clamp((ap.x * ab.x + ap.y * ab.y) / l2, 0.0, 1.0) : 0.0;
+  Vec2 d = p - (a + t * ab);
+  return d.x * d.x + d.y * d.y;
+}
+
+void ComputeScale(Surface& s, FaceDomain* d) {
+  double du = (d->umax - d->umin), dv = (d->vmax - d->vmin);
+  double hu = 1e-4 * std::max(du, 1e-12), hv = 1e-4 * std::max(dv, 1e-12);
+  double su = 0, sv = 0;
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 5; ++j) {
+      double u = d->umin + du * (i + 0.5) / 5, v = d->vmin + dv * (j + 0.5) / 5;
+      Vec3 p = s.Point(u, v);
+      su += Dist(s.Point(u + hu, v), p) / hu;
+      sv += Dist(s.Point(u, v + hv), p) / hv;
+    }
+  }
+  d->scale_u = su > 0 ? su / 25 : 1;
+  d->scale_v = sv > 0 ? sv / 25 : 1;
+  if (!std::isfinite(d->scale_u) || d->scale_u <= 0) d->scale_u = 1;
+  if (!std::isfinite(d->scale_v) || d->scale_v <= 0) d->scale_v = 1;
+}
+
+// A pcurve may miss its edge by far more than the meshing tolerance and still be valid within a
+// loose edge tolerance (Rhino's trimmed NURBS: up to a third of a segment). Boundary nodes at
+// such (u,v) sit beside the surface point they stand for, and the triangles along the boundary
+// then stand on edge and can neither meet the criteria nor be split without folding. Where
+// S(pcurve) misses a grid point by more than kPcurveMiss of its shorter segment, the node takes
+// the (u,v) where the surface passes through the point instead: Gauss-Newton from the pcurve's
+// (u,v), kept only when it lands on the point (within a tenth of the miss).
+constexpr double kPcurveMiss = 0.01;
+
+Vec2 ProjectNear(Surface& s, Vec2 start, Vec3 target, double miss) {
+  const double hu = 1e-7 * std::max(s.umax - s.umin, 1e-12);
+  const double hv = 1e-7 * std::max(s.vmax - s.vmin, 1e-12);
+  Vec2 q = start;
+  double gap = miss;
+  for (int iter = 0; iter < 8 && gap > 1e-3 * miss; ++iter) {
+    Vec3 p = s.Point(q.x, q.y);
+    Vec3 su = (1.0 / hu) * (s.Point(q.x + hu, q.y) - p);
+    Vec3 sv = (1.0 / hv) * (s.Point(q.x, q.y + hv) - p);
+    Vec3 r = target - p;
+    // Normal equations of the 2x2 least-squares step.
+    double a = Dot(su, su), b = Dot(su, sv), c = Dot(sv, sv);
+    double det = a * c - b * b;
+    if (!(det > 1e-24 * a * c)) break;
+    double ru = Dot(su, r), rv = Dot(sv, r);
+    Vec2 next{q.x + (c * ru - b * rv) / det, q.y + (a * rv - b * ru) / det};
+    double next_gap = Dist(s.Point(next.x, next.y), target);
+    if (!(next_gap < gap)) break;
+    q = next, gap = next_gap;
+  }
+  return gap <= 0.1 * miss ? q : start;
+}
+
+// One edge of a wire as the wire explorer walks it: its grid points' (u,v) in walking order.
+struct EdgeWalk {
+  int eid = 0;
+  bool reversed = false;
+  std::vector<Vec2> uv;
+};
+
+double VertexTolerance(const Model& model, int vertex_id) {
+  return vertex_id > 0 ? BRep_Tool::Tolerance(TopoDS::Vertex(model.vertices(vertex_id))) : 0.0;
+}
+
+std::string EdgeName(int eid) { return "edge " + std::to_string(eid); }
+
+// Walks one wire of the face: its edges' grid points in (u,v). Fails for an edge without id,
+// grid or pcurve, and for a wire whose edges do not connect.
+Status WalkWire(const FaceWire& wire, const std::vector<EdgeGrid>& grids,
+                std::vector<EdgeWalk>* walks) {
+  walks->clear();
+  for (const WireEdge& e : wire.edges) {
+    EdgeWalk w;
+    w.eid = e.eid;
+    if (w.eid == 0)
+      return Status(StatusCode::kInternal, "a face edge is missing from the edge map");
+    const EdgeGrid& g = grids[w.eid - 1];
+    if (g.t.size() < 2) return Status(StatusCode::kInternal, EdgeName(w.eid) + " has no grid");
+    if (e.pcurve.IsNull())
+      return Status(StatusCode::kInternal, EdgeName(w.eid) + " has no pcurve on the face");
+    w.reversed = e.reversed;
+    const int n = static_cast<int>(g.t.size());
+    for (int k = 0; k < n; ++k) {
+      gp_Pnt2d p = e.pcurve->Value(g.t[w.reversed ? n - 1 - k : k]);
+      w.uv.push_back({p.X(), p.Y()});
+    }
+    walks->push_back(std::move(w));
+  }
+  return wire.reached;
+}
+
+// Where one pcurve ends and the next begins: moves the next walk by whole periods when that
+// makes the ends meet, and checks that what is left of the gap is within the tolerance of the
+// vertex they share (the B-rep promises no more). `wrap` is the junction that closes the loop.
+Status JoinWalks(const Model& model, const EdgeGrid& from_grid, const EdgeWalk& from, EdgeWalk* to,
+                 bool wrap, double period_u, double period_v, double uv_slack, Surface& surface) {
+  Vec2 end = from.uv.back(), start = to->uv.front();
+  if (!wrap) {
+    auto shift = [&](double period, double Vec2::*axis) {
+      if (period <= 0) return;
+      double k = std::round((end.*axis - start.*axis) / period);
+      if (k == 0 || std::fabs(end.*axis - (start.*axis + k * period)) > 1e-3 * period) return;
+      for (Vec2& p : to->uv) p.*axis += k * period;
+    };
+    shift(period_u, &Vec2::x);
+    shift(period_v, &Vec2::y);
+    start = to->uv.front();
+  }
+  Vec2 gap = start - end;
+  if (std::hypot(gap.x, gap.y) <= uv_slack) return Status::Ok();
+  const int vertex = from.reversed ? from_grid.first_vertex : from_grid.last_vertex;
+  double tol = VertexTolerance(model, vertex);
+  for (int eid : {from.eid, to->eid})
+    tol = std::max(tol, BRep_Tool::Tolerance(TopoDS::Edge(model.edge(eid))));
+  const double gap3 = Dist(surface.Point(end.x, end.y), surface.Point(start.x, start.y));
+  if (gap3 <= 2 * tol * (1 + 1e-6) + 1e-12) return Status::Ok();
+  char buf[200];
+  std::snprintf(buf, sizeof(buf),
+                " do not meet in (u,v): their pcurve ends at vertex %d are %.3g apart on the "
+                "surface, more than twice its tolerance %.3g",
+                vertex, gap3, tol);
+  return Status(StatusCode::kInternal,
+                std::string(wrap ? "a boundary loop does not close in (u,v): " : "") +
+                    EdgeName(from.eid) + " and " + EdgeName(to->eid) + buf);
+}
+
+}  // namespace
+
+Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_id,
+                       const std::vector<EdgeGrid>& grids, Surface& surface, FaceDomain* d) {
+  *d = FaceDomain();
+  FaceLoops scratch;
+  const FaceLoops& loops = pcurves.Loops(model, face_id, &scratch);
+  const double period_u = loops.period_u, period_v = loops.period_v;
+  std::map<int, std::vector<int>> vertex_nodes;  // vertex id -> its nodes so far
+  std::vector<EdgeWalk> walks;
+  for (const FaceWire& wire : loops.wires) {
+    Status st = WalkWire(wire, grids, &walks);
+    if (!st.ok()) return st;
+    if (walks.empty()) continue;
+    const int m = static_cast<int>(walks.size());
+    // The slack for pcurve ends that meet: 1e-3 of the loop's extent in (u,v), as before any
+    // tolerance is looked at.
+    double span = 0;
+    for (const EdgeWalk& w : walks)
+      for (const Vec2& p : w.uv)
+        span =
+            std::max({span, std::fabs(p.x - walks[0].uv[0].x), std::fabs(p.y - walks[0].uv[0].y)});
+    const double slack = 1e-3 * std::max(span, 1e-12) + 1e-9;
+    for (int i = 0; i < m; ++i) {
+      const int j = (i + 1) % m;
+      st = JoinWalks(model, grids[walks[i].eid - 1], walks[i], &walks[j], j == 0, period_u,
+                     period_v, slack, surface);
+      if (!st.ok()) return st;
+    }
+    // Nodes: every grid point but each walk's last, which is the next walk's first.
+    std::vector<int> loop;
+    std::vector<int> seg_edge, seg_index;
+    std::vector<bool> seg_degenerate;
+    for (const EdgeWalk& w : walks) {
+      const EdgeGrid& g = grids[w.eid - 1];
+      const int n = static_cast<int>(g.t.size());
+      for (int k = 0; k + 1 < n; ++k) {
+        const int idx = w.reversed ? n - 1 - k : k;
+        NodeRef ref;
+        Vec3 xyz;
+        if (idx == 0 || idx == n - 1) {
+          ref.dim = 0;
+          ref.entity = idx == 0 ? g.first_vertex : g.last_vertex;
+          xyz = VertexPoint(model, ref.entity);
+        } else {
+          ref.dim = 1;
+          ref.entity = w.eid;
+          ref.t = g.t[idx];
+          xyz = g.xyz[idx];
+        }
+        Vec2 uv = w.uv[k];
+        if (ref.dim == 1 && !g.degenerate) {
+          double miss = Dist(surface.Point(uv.x, uv.y), xyz);
+          double segment = std::min(Dist(xyz, g.xyz[idx - 1]), Dist(xyz, g.xyz[idx + 1]));
+          if (miss > kPcurveMiss * segment) uv = ProjectNear(surface, uv, xyz, miss);
+        }
+        int node = -1;
+        if (ref.dim == 0)  // loops that touch at a vertex share its node
+          for (int other : vertex_nodes[ref.entity])
+            if (d->uv[other].x == uv.x && d->uv[other].y == uv.y) node = other;
+        if (node < 0) {
+          node = static_cast<int>(d->uv.size());
+          d->uv.push_back(uv);
+          d->xyz.push_back(xyz);
+          d->ref.push_back(ref);
+          if (ref.dim == 0) vertex_nodes[ref.entity].push_back(node);
+        }
+        loop.push_back(node);
+        seg_edge.push_back(w.eid);
+        seg_index.push_back(w.reversed ? n - 2 - k : k);
+        seg_degenerate.push_back(g.degenerate);
+      }
+    }
+    if (loop.size() < 2) continue;  // a lone pole: no boundary
+    d->loop_begin.push_back(static_cast<int>(d->segments.size()));
+    for (size_t k = 0; k < loop.size(); ++k) {
+      d->segments.push_back({loop[k], loop[(k + 1) % loop.size()]});
+      d->segment_splittable.push_back(seg_degenerate[k]);
+      d->segment_edge.push_back(seg_edge[k]);
+      d->segment_grid_index.push_back(seg_index[k]);
+    }
+  }
+  if (d->uv.size() < 2) return Status(StatusCode::kInternal, "the face has no boundary loop");
+  d->umin = d->umax = d->uv[0].x;
+  d->vmin = d->vmax = d->uv[0].y;
+  for (const Vec2& p : d->uv) {
+    d->umin = std::min(d->umin, p.x), d->umax = std::max(d->umax, p.x);
+    d->vmin = std::min(d->vmin, p.y), d->vmax = std::max(d->vmax, p.y);
+  }
+  ComputeScale(surface, d);
+  return Status::Ok();
+}
+
+double BoundaryGap(const FaceDomain& domain, Surface& surface) {
+  double gap = 0;
+  for (size_t i = 0; i < domain.uv.size(); ++i) {
+    const Vec2 q = domain.uv[i];
+    // Along the normal: a pcurve that is not parametrised as its 3D curve puts S(uv) beside the
+    // point, along the surface.
+    const Vec3 off = domain.xyz[i] - surface.Point(q.x, q.y);
+    gap = std::max(gap, std::fabs(Dot(off, surface.Normal(q.x, q.y))));
+  }
+  return gap;
+}
+
+double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain) {
+  const BRepAdaptor_Surface surface(face, false);
+  double gap = 0;
+  for (size_t i = 0; i < domain.uv.size(); ++i) {
+    const Vec2 q = domain.uv[i], in = IntoSurfaceRange(surface, q);
+    if (in.x == q.x && in.y == q.y) continue;
+    const gp_Pnt s = surface.Value(in.x, in.y);
+    gap = std::max(gap, Dist(domain.xyz[i], Vec3{s.X(), s.Y(), s.Z()}));
+  }
+  return gap;
+}
+
+double BoundaryChordHeight(const FaceDomain& domain, Surface& surface) {
+  double height = 0;
+  for (size_t k = 0; k < domain.segments.size(); ++k) {
+    if (domain.segment_edge[k] == 0 || domain.segment_splittable[k]) continue;
+    const int a = domain.segments[k][0], b = domain.segments[k][1];
+    const Vec2 q = 0.5 * (domain.uv[a] + domain.uv[b]);
+    const Vec3 off = surface.Point(q.x, q.y) - 0.5 * (domain.xyz[a] + domain.xyz[b]);
+    height = std::max(height, std::fabs(Dot(off, surface.Normal(q.x, q.y))));
+  }
+  return height;
+}
+
+std::vector<DomainConflict> FindConflicts(const FaceDomain& d, const Context* context) {
+  std::vector<DomainConflict> out;
+  const int ns = static_cast<int>(d.segments.size());
+  std::vector<Vec2> p(d.uv.size());
+  for (size_t i = 0; i < p.size(); ++i) p[i] = {d.uv[i].x * d.scale_u, d.uv[i].y * d.scale_v};
+  const double extent = std::max((d.umax - d.umin) * d.scale_u, (d.vmax - d.vmin) * d.scale_v);
+  const double eps = 1e-12 * std::max(extent, 1e-300);
+  // Loops that enclose no area.
+  for (size_t k = 0; k < d.loop_begin.size(); ++k) {
+    const int b = d.loop_begin[k];
+    const int e = k + 1 < d.loop_begin.size() ? d.loop_begin[k + 1] : ns;
+    double area = 0, perimeter = 0;
+    for (int s = b; s < e; ++s) {
+      Vec2 a = p[d.segments[s][0]], c = p[d.segments[s][1]];
+      area += Cross(a, c);
+      perimeter += std::hypot(c.x - a.x, c.y - a.y);
+    }
+    if (e - b < 3 || std::fabs(area) <= 1e-10 * perimeter * perimeter)
+      for (int s = b; s < e; ++s) out.push_back({s, -1});
+  }
+  // Segment pairs, swept along u by their bounding boxes.
+  std::vector<int> order(ns);
+  for (int s = 0; s < ns; ++s) order[s] = s;
+  auto lo = [&](int s) { return std::min(p[d.segments[s][0]].x, p[d.segments[s][1]].x); };
+  auto hi = [&](int s) { return std::max(p[d.segments[s][0]].x, p[d.segments[s][1]].x); };
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return lo(a) < lo(b); });
+  auto seg_dist = [](Vec2 q, Vec2 a, Vec2 b) { return std::sqrt(SegmentDistance2(q, a, b)); };
+  std::vector<int> active;
+  for (int k = 0; k < ns; ++k) {
+    // Segments that share a u range (one edge along v) are all active at once: poll often.
+    if ((k & 63) == 63 && context && context->ShouldStop()) break;
+    const int s = order[k];
+    const double x0 = lo(s);
+    active.erase(
+        std::remove_if(active.begin(), active.end(), [&](int t) { return hi(t) < x0 - eps; }),
+        active.end());
+    const int a0 = d.segments[s][0], a1 = d.segments[s][1];
+    const Vec2 a = p[a0], b = p[a1];
+    for (int t : active) {
+      const int c0 = d.segments[t][0], c1 = d.segments[t][1];
+      const Vec2 c = p[c0], e = p[c1];
+      if (std::min(a.y, b.y) > std::max(c.y, e.y) + eps ||
+          std::min(c.y, e.y) > std::max(a.y, b.y) + eps)
+        continue;
+      bool conflict;
+      const int shared = (a0 == c0) + (a0 == c1) + (a1 == c0) + (a1 == c1);
+      if (shared >= 2) {
+        conflict = true;  // the same chord twice
+      } else if (shared == 1) {
+        // Neighbours conflict only when they fold back onto each other.
+        const int common = (a0 == c0 || a0 == c1) ? a0 : a1;
+        const Vec2 o = p[common];
+        const Vec2 u = p[common == a0 ? a1 : a0] - o, v = p[(c0 == common) ? c1 : c0] - o;
+        const double lu = std::hypot(u.x, u.y), lv = std::hypot(v.x, v.y);
+        conflict = std::fabs(Cross(u, v)) <= 1e-12 * lu * lv && u.x * v.x + u.y * v.y > 0;
+      } else {
+        const double o1 = Orient(a, b, c), o2 = Orient(a, b, e);
+        const double o3 = Orient(c, e, a), o4 = Orient(c, e, b);
+        conflict = ((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) &&
+                   ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0));
+        conflict = conflict || std::min({seg_dist(a, c, e), seg_dist(b, c, e), seg_dist(c, a, b),
+                                         seg_dist(e, a, b)}) <= eps;
+      }
+      if (conflict) out.push_back({std::min(s, t), std::max(s, t)});
+    }
+    active.push_back(s);
+  }
+  return out;
+}
+
+std::string DescribeConflict(const FaceDomain& d, const DomainConflict& c) {
+  auto edge_of = [&](int s) {
+    return d.segment_edge[s] > 0 ? EdgeName(d.segment_edge[s]) : std::string("a gap bridge");
+  };
+  const Vec2 q = d.uv[d.segments[c.a][0]];
+  char at[80];
+  std::snprintf(at, sizeof(at), " near (u,v) = (%.6g, %.6g)", q.x, q.y);
+  if (c.b < 0) return "a boundary loop through " + edge_of(c.a) + " encloses no area in (u,v)" + at;
+  return "boundary loops intersect in (u,v): segments of " + edge_of(c.a) + " and " + edge_of(c.b) +
+         " cross or touch" + at;
+}
+
+bool InsideDomain(const FaceDomain& d, Vec2 p) {
+  bool inside = false;
+  for (const auto& s : d.segments) {
+    Vec2 a = d.uv[s[0]], b = d.uv[s[1]];
+    if ((a.y > p.y) != (b.y > p.y)) {
+      double x = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
+      if (p.x < x) inside = !inside;
+    }
+  }
+  return inside;
+}
+
+namespace {
+
+// How far the surface normal turns along u (along_u) or along v: for each of five probe lines
+// across the domain, the turn in each of `steps` even steps along it (line-major).
+std::vector<double> TurnSteps(const FaceDomain& d, Surface& s, bool along_u, int steps) {
+  const double du = d.umax - d.umin, dv = d.vmax - d.vmin;
+  std::vector<double> turn;
+  turn.reserve(5 * steps);
+  for (int j = 0; j < 5; ++j) {
+    Vec3 prev;
+    for (int i = 0; i <= steps; ++i) {
+      double a = static_cast<double>(i) / steps, b = (j + 0.5) / 5;
+      double u = d.umin + du * (along_u ? a : b), v = d.vmin + dv * (along_u ? b : a);
+      Vec3 n = s.Normal(u, v);
+      if (i > 0) turn.push_back(std::acos(std::clamp(Dot(n, prev), -1.0, 1.0)));
+      prev = n;
+    }
+  }
+  return turn;
+}
+
+// The largest total turn over the probe lines of TurnSteps.
+double WorstTurn(const std::vector<double>& turn, int steps) {
+  double worst = 0;
+  for (int j = 0; j < 5; ++j) {
+    double total = 0;
+    for (int i = 0; i < steps; ++i) total += turn[j * steps + i];
+    worst = std::max(worst, total);
+  }
+  return worst;
+}
+
+// Seed lines along one parameter: where they cross it, and the width of each one's cell (scaled
+// as for 2D tests).
+struct SeedLines {
+  std::vector<double> at, cell;
+};
+
+// Where `count` seed lines go along one parameter (range [lo, lo + range], scale as the domain's):
+// the middles of even cells, unless the normal turns much faster in part of the range than an
+// even cell can take (a blunt nose at the end of a long hull: all of its turn in the first cell,
+// and a fan from the pole across it; a tight blend along one side of a B-spline patch). Then the
+// lines, as many as the finely probed turn needs, split it into even parts.
+SeedLines PlaceSeedLines(const FaceDomain& d, Surface& s, bool along_u, int count,
+                         const std::vector<double>& coarse, int coarse_steps, double step) {
+  const double lo = along_u ? d.umin : d.vmin, range = along_u ? d.umax - d.umin : d.vmax - d.vmin;
+  const double scale = along_u ? d.scale_u : d.scale_v;
+  SeedLines lines;
+  for (int i = 0; i < count; ++i) {
+    lines.at.push_back(lo + range * (i + 0.5) / count);
+    lines.cell.push_back(range * scale / count);
+  }
+  double densest = 0;  // the largest turn per whole range
+  for (int i = 0; i < coarse_steps; ++i)
+    for (int j = 0; j < 5; ++j) densest = std::max(densest, coarse[j * coarse_steps + i]);
+  densest *= coarse_steps;
+  if (!(densest / count > 1.5 * step)) return lines;
+  constexpr int kFine = 8;
+  const int steps = kFine * coarse_steps;
+  std::vector<double> turn = TurnSteps(d, s, along_u, steps);
+  std::vector<double> cumulative(steps + 1, 0.0);
+  for (int i = 0; i < steps; ++i) {
+    double most = 0;
+    for (int j = 0; j < 5; ++j) most = std::max(most, turn[j * steps + i]);
+    cumulative[i + 1] = cumulative[i] + most;
+  }
+  const double total = cumulative[steps];
+  if (!(total > 0)) return lines;
+  const int n = std::clamp(static_cast<int>(std::ceil(total / step - 1e-9)), count, 12);
+  std::vector<double> at(n);
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    double target = total * (i + 0.5) / n;
+    while (k + 1 < steps && cumulative[k + 1] < target) ++k;
+    double part = cumulative[k + 1] - cumulative[k];
+    at[i] = (k + (part > 0 ? (target - cumulative[k]) / part : 0.5)) / steps;
+  }
+  lines.at.assign(n, 0);
+  lines.cell.assign(n, 0);
+  for (int i = 0; i < n; ++i) {
+    double from = i > 0 ? 0.5 * (at[i - 1] + at[i]) : 0.0;
+    double to = i + 1 < n ? 0.5 * (at[i] + at[i + 1]) : 1.0;
+    lines.at[i] = lo + range * at[i];
+    lines.cell[i] = range * scale * (to - from);
+  }
+  return lines;
+}
+
+}  // namespace
+
+std::vector<Vec2> SeedPoints(const FaceDomain& d, Surface& s) {
+  const int kProbe = 9;
+  const double kStep = M_PI / 6;
+  std::vector<double> turn_u = TurnSteps(d, s, true, kProbe - 1);
+  std::vector<double> turn_v = TurnSteps(d, s, false, kProbe - 1);
+  int nu =
+      std::clamp(static_cast<int>(std::ceil(WorstTurn(turn_u, kProbe - 1) / kStep - 1e-9)), 1, 12);
+  int nv =
+      std::clamp(static_cast<int>(std::ceil(WorstTurn(turn_v, kProbe - 1) / kStep - 1e-9)), 1, 12);
+  std::vector<Vec2> seeds;
+  if (nu * nv <= 1) return seeds;
+  SeedLines lines_u = PlaceSeedLines(d, s, true, nu, turn_u, kProbe - 1, kStep);
+  SeedLines lines_v = PlaceSeedLines(d, s, false, nv, turn_v, kProbe - 1, kStep);
+  for (size_t j = 0; j < lines_v.at.size(); ++j) {
+    for (size_t i = 0; i < lines_u.at.size(); ++i) {
+      Vec2 p{lines_u.at[i], lines_v.at[j]};
+      if (!InsideDomain(d, p)) continue;
+      // Clear of the boundary by 0.35 of its cell's smaller side.
+      double clearance = 0.35 * std::min(lines_u.cell[i], lines_v.cell[j]);
+      double clearance2 = clearance * clearance;
+      Vec2 ps{p.x * d.scale_u, p.y * d.scale_v};
+      bool clear = true;
+      for (const auto& seg : d.segments) {
+        Vec2 a{d.uv[seg[0]].x * d.scale_u, d.uv[seg[0]].y * d.scale_v};
+        Vec2 b{d.uv[seg[1]].x * d.scale_u, d.uv[seg[1]].y * d.scale_v};
+        if (SegmentDistance2(ps, a, b) < clearance2) {
+          clear = false;
+          break;
+        }
+      }
+      if (clear) seeds.push_back(p);
+    }
+  }
+  return seeds;
+}
+
+}  // namespace rdmesh

@@ -1,0 +1,95 @@
+#pragma once
+// The domain of one face in its (u,v) parameter space: the boundary loops (outer loop, holes,
+// both sides of a seam, degenerate pole edges) built from the shared edge grids through the
+// face's pcurves, and a scale that makes the domain roughly isometric for 2D tests.
+
+#include <TopoDS_Face.hxx>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "boundary/edge_grids.h"
+#include "boundary/node_ref.h"
+#include "boundary/pcurves.h"
+#include "core/geom.h"
+#include "geometry/surface.h"
+#include "rdmesh/context.h"
+#include "rdmesh/status.h"
+
+namespace rdmesh {
+
+class Model;
+
+/// Boundary of a face in (u,v). Nodes are the boundary nodes; segments join them with the face
+/// on their left for a FORWARD face (orientation is not relied on by the triangulation). A
+/// vertex where two loops (or one loop twice) touch at the same (u,v) is one node.
+struct FaceDomain {
+  std::vector<Vec2> uv;      ///< per node: surface parameters
+  std::vector<Vec3> xyz;     ///< per node: world point (shared bit-identically with neighbours)
+  std::vector<NodeRef> ref;  ///< per node: B-rep classification
+  std::vector<std::array<int, 2>> segments;  ///< node index pairs
+  std::vector<bool> segment_splittable;      ///< degenerate (pole) segments may be split
+  /// Per segment: the edge id it comes from (0 for a bridge over a gap between pcurve ends) and
+  /// the index k of the edge grid segment [t[k], t[k+1]] it stands for.
+  std::vector<int> segment_edge, segment_grid_index;
+  /// Segments of loop k are [loop_begin[k], loop_begin[k + 1]), the last up to segments.size().
+  std::vector<int> loop_begin;
+  double scale_u = 1, scale_v = 1;                ///< multiply u, v by these for isotropic 2D tests
+  double umin = 0, umax = 0, vmin = 0, vmax = 0;  ///< bounds of the boundary nodes
+};
+
+/// Builds the domain of face `face_id` (its FORWARD orientation) from the edge grids (indexed
+/// by edge id - 1). Consecutive pcurves are joined across gaps that the vertex tolerance allows
+/// and across whole periods of a periodic surface. An edge grid point whose pcurve (u,v) misses
+/// it on the surface (a loose pcurve, within a large edge tolerance) takes the nearby (u,v) where
+/// the surface passes through it. Fails with a reason that names the edges for
+/// bad pcurves and loops that do not close.
+Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_id,
+                       const std::vector<EdgeGrid>& grids, Surface& surface, FaceDomain* domain);
+
+/// How far the domain's nodes (points of the edges' 3D curves, shared with the neighbouring
+/// faces) lie off the surface at their (u,v): the largest |(xyz - S(uv)) . N(uv)|. The B-rep lets
+/// it reach the edge and vertex tolerances; the mesh's triangles along such an edge lean from its
+/// points to the surface, so the face cannot be meshed much closer than this.
+double BoundaryGap(const FaceDomain& domain, Surface& surface);
+
+/// How far the domain's nodes lie off the face where their (u,v) runs past the surface's own
+/// range (IntoSurfaceRange): the largest |xyz - S(uv moved into the range)|, 0 where none does.
+/// There OCCT extends the surface, so BoundaryGap sees the extension, while the face ends at the
+/// range. `domain` in the face's own (u,v) (not its B-spline conversion's).
+double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain);
+
+/// How far the chords of the domain's edge segments (not bridges) lie off the surface at their
+/// middles, along the normal: the largest |(S(mid uv) - mid xyz) . N(mid uv)|. Face refinement
+/// cannot change them; the edge grids set them (and keep them no finer than the edge tolerance).
+double BoundaryChordHeight(const FaceDomain& domain, Surface& surface);
+
+/// A defect of a domain that the constrained triangulation cannot take: segments `a` and `b`
+/// cross, touch or overlap in (u,v), or (b = -1) segment `a` belongs to a loop that encloses no
+/// area (fewer than three nodes, or all on one line).
+struct DomainConflict {
+  int a = 0, b = -1;
+};
+
+/// All conflicts of the domain's boundary segments, in scaled (u,v). Most come from edge grids
+/// too coarse for the face (a chord that cuts across a nearby loop); splitting the edge grid
+/// segments involved removes them. When `context` (may be null) asks to stop, returns early with
+/// the conflicts found so far.
+std::vector<DomainConflict> FindConflicts(const FaceDomain& domain,
+                                          const Context* context = nullptr);
+
+/// A sentence that names the edges of the first conflict, for failure reasons.
+std::string DescribeConflict(const FaceDomain& domain, const DomainConflict& conflict);
+
+/// Interior seed points for curved faces: a coarse (u,v) grid, spaced by how far the surface
+/// normal turns, so that no starting triangle spans more than ~45 degrees of the surface. Grid
+/// lines are even along a parameter unless the turn is concentrated in part of its range (a blunt
+/// nose on a long body, a tight blend along one side of a patch); then they split the turn into
+/// even parts, so that the pole of such a nose gets a ring of seeds at one distance instead of
+/// fans across the whole nose, and the blend gets lines of its own.
+std::vector<Vec2> SeedPoints(const FaceDomain& domain, Surface& surface);
+
+/// True when p lies inside the domain (even-odd rule over all boundary segments).
+bool InsideDomain(const FaceDomain& domain, Vec2 p);
+
+}  // namespace rdmesh

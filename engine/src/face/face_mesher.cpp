@@ -1,0 +1,465 @@
+#include "face/face_mesher.h"
+
+#include <BRep_Tool.hxx>
+#include <GeomLProp_SLProps.hxx>
+#include <Geom_Surface.hxx>
+#include <Precision.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "boundary/face_domain.h"
+#include "face/cdt.h"
+#include "face/lattice_seeds.h"
+#include "face/refine.h"
+#include "face/refine_constants.h"
+#include "face/unfold.h"
+#include "face/work_mesh.h"
+#include "geometry/surface.h"
+#include "geometry/surface_type.h"
+#include "model/model.h"
+
+namespace rdmesh {
+
+namespace {
+
+FaceMesh Failed(FaceMesh f, const std::string& reason) {
+  f.status = FaceStatus::kFailed;
+  f.reason = reason;
+  f.xyz.clear(), f.uv.clear(), f.normals.clear(), f.triangles.clear();
+  f.triangle_deviation.clear();
+  return f;
+}
+
+double TriangleArea(const FaceMesh& f, int t) {
+  const int32_t* x = &f.triangles[3 * t];
+  Vec3 p[3];
+  for (int i = 0; i < 3; ++i) p[i] = {f.xyz[3 * x[i]], f.xyz[3 * x[i] + 1], f.xyz[3 * x[i] + 2]};
+  return Area(p[0], p[1], p[2]);
+}
+
+// Compacts the live part of the working mesh into a FaceMesh, oriented outward. Triangles with
+// two corners at one point (at a pole) vanish.
+// `deviation` holds the estimated deviation of each working-mesh triangle (RefineStats).
+void Extract(const WorkMesh& m, const std::vector<double>& deviation, bool reversed, FaceMesh* f,
+             std::vector<NodeRef>* refs) {
+  std::vector<int> index(m.node_count(), -1);
+  f->xyz.reserve(3 * m.node_count());
+  f->uv.reserve(2 * m.node_count());
+  f->normals.reserve(3 * m.node_count());
+  refs->reserve(m.node_count());
+  f->triangles.reserve(3 * m.tri.size());
+  f->triangle_deviation.reserve(m.tri.size());
+  for (int t = 0; t < static_cast<int>(m.tri.size()); ++t) {
+    if (!m.alive[t]) continue;
+    const Tri& x = m.tri[t];
+    const Vec3 &a = m.xyz[x[0]], &b = m.xyz[x[1]], &c = m.xyz[x[2]];
+    auto same = [](const Vec3& p, const Vec3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; };
+    if (same(a, b) || same(b, c) || same(c, a)) continue;
+    int32_t ids[3];
+    for (int i = 0; i < 3; ++i) {
+      int v = x[i];
+      if (index[v] < 0) {
+        index[v] = static_cast<int>(f->xyz.size() / 3);
+        f->xyz.insert(f->xyz.end(), {m.xyz[v].x, m.xyz[v].y, m.xyz[v].z});
+        f->uv.insert(f->uv.end(), {m.uv[v].x, m.uv[v].y});
+        Vec3 n = reversed ? -m.normal[v] : m.normal[v];
+        f->normals.insert(f->normals.end(), {n.x, n.y, n.z});
+        NodeRef r = m.ref[v];
+        if (r.dim == 2) r.entity = f->face_id;
+        refs->push_back(r);
+      }
+      ids[i] = index[v];
+    }
+    if (reversed) std::swap(ids[1], ids[2]);
+    f->triangles.insert(f->triangles.end(), {ids[0], ids[1], ids[2]});
+    f->triangle_deviation.push_back(deviation[t]);
+  }
+}
+
+// Where the surface's first derivatives leave the normal undefined (a pole, as a sphere's), the
+// exact normal from OCCT's GeomLProp_SLProps (higher derivatives) instead of the refinement's
+// estimate (Surface::Normal: the mean of four normals around the pole, about a degree off).
+// Boundary nodes only, where poles lie; it changes no node or triangle. `f` is in the face's
+// own (u,v): not for a face meshed on its B-spline conversion.
+void ExactPoleNormals(const TopoDS_Face& face, const std::vector<NodeRef>& refs, FaceMesh* f) {
+  TopLoc_Location location;
+  Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
+  if (surface.IsNull() || refs.size() * 3 != f->normals.size() || refs.size() * 2 != f->uv.size())
+    return;
+  const gp_Trsf to_world = location.Transformation();
+  for (size_t i = 0; i < refs.size(); ++i) {
+    if (refs[i].dim > 1) continue;
+    const double u = f->uv[2 * i], v = f->uv[2 * i + 1];
+    gp_Pnt point;
+    gp_Vec du, dv;
+    surface->D1(u, v, point, du, dv);
+    const double scale = du.SquareMagnitude() + dv.SquareMagnitude();
+    if (scale > 0 && du.Crossed(dv).SquareMagnitude() > 1e-16 * scale * scale) continue;
+    GeomLProp_SLProps props(surface, u, v, 2, Precision::Confusion());
+    if (!props.IsNormalDefined()) continue;  // a cone's apex: no one normal
+    gp_Vec exact(props.Normal());
+    exact.Transform(to_world);
+    double* n = &f->normals[3 * i];
+    const gp_Vec estimate(n[0], n[1], n[2]);
+    if (estimate.Magnitude() == 0.0) continue;
+    double angle = exact.Angle(estimate);
+    if (angle > M_PI / 2) exact.Reverse(), angle = M_PI - angle;
+    if (angle > 5.0 * M_PI / 180.0) continue;  // not the pole the estimate is near
+    n[0] = exact.X(), n[1] = exact.Y(), n[2] = exact.Z();
+  }
+}
+
+// A view of an evaluator owned elsewhere (FaceSurfaces): the same values, one call further.
+class LentSurface final : public Surface {
+ public:
+  explicit LentSurface(Surface* inner) : inner_(inner) {
+    umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
+    uknots = inner_->uknots, vknots = inner_->vknots;
+    quadric = inner_->quadric;
+    planar = inner_->planar;
+  }
+  Vec3 Point(double u, double v) override { return inner_->Point(u, v); }
+  Vec3 Normal(double u, double v) override { return inner_->Normal(u, v); }
+
+ private:
+  Surface* inner_;
+};
+
+// The evaluator of a face: lent by `surfaces` when there are some, else made for this use.
+std::unique_ptr<Surface> FaceSurface(const Model& model, const FacePcurves& pcurves, int face_id,
+                                     bool nurbs, FaceSurfaces* surfaces) {
+  if (surfaces) return surfaces->Lend(model, pcurves, face_id, nurbs);
+  return MakeFaceSurface(model.face(face_id), nurbs, pcurves.Bounds(model, face_id));
+}
+
+// The largest tolerance of the face's edges.
+double EdgeTolerance(const TopoDS_Face& face) {
+  double tolerance = 0;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next())
+    tolerance = std::max(tolerance, BRep_Tool::Tolerance(TopoDS::Edge(ex.Current())));
+  return tolerance;
+}
+
+// A face left unmeshed because the run was asked to stop (the run's status says why).
+FaceMesh Stopped(FaceMesh f, const Context& context) {
+  f = Failed(std::move(f), context.StopStatus().message());
+  f.status = FaceStatus::kSkipped;
+  return f;
+}
+
+}  // namespace
+
+std::string BrepReason(double deviation, double gap, double tolerance, double missed) {
+  char text[360];
+  int n = std::snprintf(text, sizeof(text),
+                        "the B-rep prevents the requested deviation %.3g: its edge tolerance is up "
+                        "to %.3g and its edges lie up to %.3g off its surface",
+                        deviation, tolerance, gap);
+  if (missed > deviation + std::max(gap, tolerance) && n > 0 && n < int(sizeof(text)))
+    std::snprintf(text + n, sizeof(text) - n,
+                  "; beyond that, some triangles could not be refined to the criteria without "
+                  "folding (up to %.3g)",
+                  missed);
+  return text;
+}
+
+FaceSurfaces::FaceSurfaces(int face_count) : exact_(face_count), nurbs_(face_count) {}
+FaceSurfaces::~FaceSurfaces() = default;
+
+std::unique_ptr<Surface> FaceSurfaces::Lend(const Model& model, const FacePcurves& pcurves,
+                                            int face_id, bool nurbs) {
+  std::unique_ptr<Surface>& slot = (nurbs ? nurbs_ : exact_)[face_id - 1];
+  if (!slot) slot = MakeFaceSurface(model.face(face_id), nurbs, pcurves.Bounds(model, face_id));
+  return std::make_unique<LentSurface>(slot.get());
+}
+
+namespace {
+
+// One face's meshing, as the named steps MeshFace runs in turn. Each step that can end the face
+// early returns false and leaves `f` saying why (failed, or skipped when the run was stopped).
+class FaceRun {
+ public:
+  FaceRun(const Model& model, const FacePcurves& pcurves, int face_id,
+          const std::vector<EdgeGrid>& grids, const FaceJob& job, Context* context, FaceMesh* f)
+      : model_(model),
+        pcurves_(pcurves),
+        face_id_(face_id),
+        grids_(grids),
+        job_(job),
+        context_(context),
+        f_(*f),
+        face_(model.face(face_id)) {}
+
+  // The evaluator and the face's boundary loops in (u,v), which must not cross.
+  bool BuildDomain() {
+    f_.surface_type = FaceSurfaceType(face_);
+    surface_ = WithPointCache(FaceSurface(model_, pcurves_, face_id_, job_.nurbs, job_.surfaces));
+    Status st = BuildFaceDomain(model_, pcurves_, face_id_, grids_, *surface_, &domain_);
+    if (!st.ok()) return Fail(st.message());
+    if (Stopping()) return Stop();
+    std::vector<DomainConflict> conflicts = FindConflicts(domain_, context_);
+    if (Stopping()) return Stop();
+    if (!conflicts.empty()) return Fail(DescribeConflict(domain_, conflicts.front()));
+    return true;
+  }
+
+  // A sphere meshed to a deviation alone starts from a lattice at about its final density,
+  // settled before refinement; other faces from a coarse grid of seeds.
+  void PlaceSeeds() {
+    if (f_.surface_type == SurfaceType::kSphere && !job_.nurbs && job_.criteria.rd_tolerance == 0 &&
+        job_.criteria.max_length == 0) {
+      seeds_ = SphereLatticeSeeds(domain_, *surface_, job_.criteria.max_deviation,
+                                  static_cast<size_t>(job_.max_triangles / 2));
+    }
+    settle_rounds_ = seeds_.empty() ? 0 : kLatticeSettleRounds;
+    if (seeds_.empty()) seeds_ = SeedPoints(domain_, *surface_);
+  }
+
+  // The constrained triangulation of boundary and seeds in scaled (u,v), as a working mesh.
+  bool Triangulate() {
+    std::vector<Vec2> points;
+    for (const Vec2& p : domain_.uv)
+      points.push_back({p.x * domain_.scale_u, p.y * domain_.scale_v});
+    for (const Vec2& p : seeds_) points.push_back({p.x * domain_.scale_u, p.y * domain_.scale_v});
+    CdtResult cdt;
+    Status st = ConstrainedTriangulation(points, domain_.segments, context_, &cdt);
+    if (Stopping()) return Stop();
+    if (!st.ok()) return Fail(st.message());
+    // A face of 10^5 boundary nodes (absurd options) spends seconds here under a sanitizer:
+    // poll every few thousand nodes.
+    auto stop_every = [this](size_t i) { return (i & 4095) == 4095 && Stopping(); };
+    for (size_t i = 0; i < domain_.uv.size(); ++i) {
+      const Vec2& q = domain_.uv[i];
+      mesh_.AddNode(q, domain_.xyz[i], surface_->Normal(q.x, q.y), true, domain_.ref[i]);
+      if (stop_every(i)) return Stop();
+    }
+    for (size_t i = 0; i < seeds_.size(); ++i) {
+      const Vec2& q = seeds_[i];
+      mesh_.AddNode(q, surface_->Point(q.x, q.y), surface_->Normal(q.x, q.y), false, NodeRef{});
+      if (stop_every(i)) return Stop();
+    }
+    std::vector<std::array<int, 2>> splittable;
+    for (size_t s = 0; s < domain_.segments.size(); ++s)
+      if (domain_.segment_splittable[s]) splittable.push_back(domain_.segments[s]);
+    InitWorkMesh(cdt.triangles, cdt.constrained, splittable, &mesh_);
+    if (Stopping()) return Stop();
+    return true;
+  }
+
+  // A first triangulation that folds is unfolded first (flips, and bisections where flips are
+  // not enough), then refined; where that stays stuck over the criteria, the triangulation as it
+  // was is refined too, under a cap, and the better result kept; a stuck result is then refined
+  // again from itself while that helps. A run stop leaves the face skipped.
+  bool Refine() {
+    WorkMesh folded = mesh_;
+    const bool unfolded =
+        UnfoldInitialMesh(&mesh_, *surface_, domain_.scale_u, domain_.scale_v) > 0;
+    status_ = RefineFace(&mesh_, *surface_, job_.criteria, domain_.scale_u, domain_.scale_v,
+                         job_.max_triangles, job_.improve, context_, &stats_, settle_rounds_);
+    if (unfolded && Stuck()) {
+      const int64_t cap = kFoldedStartCap * std::max(stats_.refined_triangles, kFoldedStartMin);
+      // A tie goes to the folded start: its own refinement is as good a mesh.
+      KeepIfBetter(&folded, settle_rounds_, std::min(job_.max_triangles, cap), true);
+    }
+    // A fresh refiner counts every triangle as a first generation, whose splits may fold
+    // children (kFoldingGenerations), which frees splits that the fold guard blocked.
+    for (int round = 0; round < kStuckRetries && Stuck(); ++round) {
+      WorkMesh again = mesh_;
+      if (!KeepIfBetter(&again, 0, job_.max_triangles, false)) break;
+    }
+    if (!status_.ok()) {
+      f_.status = FaceStatus::kSkipped;
+      f_.reason = status_.message();
+      return false;
+    }
+    if (Stopping()) return Stop();
+    return true;
+  }
+
+  // The face's triangles, oriented as the face, with exact normals (at poles too) and the
+  // working mesh's node references.
+  bool Extract(std::vector<NodeRef>* refs) {
+    rdmesh::Extract(mesh_, stats_.deviation, face_.Orientation() == TopAbs_REVERSED, &f_, refs);
+    if (f_.triangles.empty()) return Fail("no triangles survived");
+    if (Stopping()) return Stop();
+    if (!job_.nurbs) ExactPoleNormals(face_, *refs, &f_);
+    f_.max_deviation = stats_.max_deviation;
+    f_.status = FaceStatus::kOk;
+    return true;
+  }
+
+  // Why a meshed face may miss the request: the B-rep itself keeps it from the requested
+  // deviation where its edges lie off the surface by more (BoundaryGap, or past the surface's own
+  // range: BoundaryGapPastSurface), or where its edges' tolerance is coarser and the face misses
+  // it or its edges' chords do (edge grids are not refined below an edge's tolerance:
+  // edge_grids.cpp); else the triangle cap, or triangles no split could bring within criteria.
+  void ExplainShortfall() {
+    const double deviation = job_.criteria.max_deviation;
+    double gap = deviation > 0 ? BoundaryGap(domain_, *surface_) : 0;
+    if (deviation > 0 && !job_.nurbs) gap = std::max(gap, BoundaryGapPastSurface(face_, domain_));
+    const double tolerance = deviation > 0 ? EdgeTolerance(face_) : 0;
+    const bool missed = stats_.max_violation > 1.0 + 1e-9;
+    const bool coarse =
+        tolerance > deviation && (missed || BoundaryChordHeight(domain_, *surface_) > deviation);
+    if (gap > deviation) f_.max_deviation = std::max(f_.max_deviation, gap);
+    if (stats_.budget_hit)
+      f_.reason = "stopped at the per-face triangle cap";
+    else if (deviation > 0 && (gap > deviation || coarse))
+      f_.reason = BrepReason(deviation, gap, tolerance, missed ? stats_.max_deviation : 0);
+    else if (missed)
+      f_.reason = "some triangles could not be refined to the criteria without folding";
+  }
+
+ private:
+  bool Stopping() const { return context_ && context_->ShouldStop(); }
+  bool Stop() {
+    f_ = Stopped(std::move(f_), *context_);
+    return false;
+  }
+  bool Fail(const std::string& reason) {
+    f_ = Failed(std::move(f_), reason);
+    return false;
+  }
+  // Refinement ended within its budget but over the criteria.
+  bool Stuck() const {
+    return status_.ok() && stats_.max_violation > 1.0 + 1e-9 && !stats_.budget_hit;
+  }
+  // Refines `candidate` (under `cap` triangles) and keeps it when it lowers the worst violation,
+  // or with `ties` keeps it as bad (and, under a cap of its own, when it did not reach it).
+  bool KeepIfBetter(WorkMesh* candidate, int settle, int64_t cap, bool ties) {
+    RefineStats again;
+    status_ = RefineFace(candidate, *surface_, job_.criteria, domain_.scale_u, domain_.scale_v, cap,
+                         job_.improve, context_, &again, settle);
+    if (!status_.ok()) return false;
+    if (ties ? !(again.max_violation <= stats_.max_violation)
+             : !(again.max_violation < stats_.max_violation))
+      return false;
+    if (cap < job_.max_triangles && again.budget_hit) return false;
+    mesh_ = std::move(*candidate), stats_ = again;
+    return true;
+  }
+
+  const Model& model_;
+  const FacePcurves& pcurves_;
+  const int face_id_;
+  const std::vector<EdgeGrid>& grids_;
+  const FaceJob& job_;
+  Context* context_;
+  FaceMesh& f_;
+  const TopoDS_Face& face_;
+  std::unique_ptr<Surface> surface_;
+  FaceDomain domain_;
+  std::vector<Vec2> seeds_;
+  int settle_rounds_ = 0;
+  WorkMesh mesh_;
+  RefineStats stats_;
+  Status status_;
+};
+
+}  // namespace
+
+FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
+                  const std::vector<EdgeGrid>& grids, const FaceJob& job, Context* context,
+                  std::vector<NodeRef>* refs) {
+  auto t0 = std::chrono::steady_clock::now();
+  FaceMesh f;
+  f.face_id = face_id;
+  f.exact_area = model.face_area[face_id - 1];
+  refs->clear();
+  try {
+    FaceRun run(model, pcurves, face_id, grids, job, context, &f);
+    if (!run.BuildDomain()) return f;
+    run.PlaceSeeds();
+    if (!run.Triangulate() || !run.Refine() || !run.Extract(refs)) return f;
+    run.ExplainShortfall();
+  } catch (const Standard_Failure& e) {
+    return Failed(f, std::string("OCCT: ") + (e.GetMessageString() && *e.GetMessageString()
+                                                  ? e.GetMessageString()
+                                                  : e.DynamicType()->Name()));
+  } catch (const std::exception& e) {
+    return Failed(f, e.what());
+  }
+  for (int t = 0; t < f.triangle_count(); ++t) f.area += TriangleArea(f, t);
+  f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return f;
+}
+
+Result<FaceDomain> CopySource(const Model& model, const FacePcurves& pcurves, int rep_id,
+                              const std::vector<EdgeGrid>& grids) {
+  try {
+    std::unique_ptr<Surface> surface =
+        MakeFaceSurface(model.face(rep_id), false, pcurves.Bounds(model, rep_id));
+    FaceDomain domain;
+    if (!BuildFaceDomain(model, pcurves, rep_id, grids, *surface, &domain).ok())
+      return Status(StatusCode::kFaceFailed, "instance boundary differs");
+    return domain;
+  } catch (const Standard_Failure& e) {
+    return Status(StatusCode::kInternal, std::string("OCCT: ") + e.DynamicType()->Name());
+  } catch (const std::exception& e) {
+    return Status(StatusCode::kInternal, e.what());
+  }
+}
+
+FaceMesh PlaceCopy(const Model& model, const FacePcurves& pcurves, int face_id, const FaceMesh& rep,
+                   const std::vector<NodeRef>& rep_refs, const Result<FaceDomain>& source,
+                   const std::vector<EdgeGrid>& grids, std::vector<NodeRef>* refs) {
+  FaceMesh f = rep;
+  f.face_id = face_id;
+  f.exact_area = model.face_area[face_id - 1];
+  *refs = rep_refs;
+  if (rep.status != FaceStatus::kOk) return f;
+  try {
+    // Boundary nodes: the copy's own domain lists them in the same order as the
+    // representative's (same TShape), with its own exact points and ids.
+    std::unique_ptr<Surface> surface =
+        MakeFaceSurface(model.face(face_id), false, pcurves.Bounds(model, face_id));
+    FaceDomain mine;
+    Status st = BuildFaceDomain(model, pcurves, face_id, grids, *surface, &mine);
+    if (st.ok() && !source.ok()) return Failed(f, source.status().message());
+    if (!st.ok() || mine.uv.size() != source->uv.size())
+      return Failed(f, "instance boundary differs");
+    const FaceDomain& theirs = *source;
+    const gp_Trsf& trsf = model.face_placement[face_id - 1];
+    for (int i = 0; i < f.node_count(); ++i) {
+      NodeRef& r = (*refs)[i];
+      if (r.dim == 2) {
+        gp_Pnt p(f.xyz[3 * i], f.xyz[3 * i + 1], f.xyz[3 * i + 2]);
+        p.Transform(trsf);
+        f.xyz[3 * i] = p.X(), f.xyz[3 * i + 1] = p.Y(), f.xyz[3 * i + 2] = p.Z();
+        r.entity = face_id;
+      } else {
+        // Find this node among the representative's boundary nodes by (u,v).
+        // Pole nodes added by refinement are not in the domain: match them by their vertex.
+        size_t k = 0;
+        for (; k < theirs.uv.size(); ++k)
+          if (theirs.uv[k].x == f.uv[2 * i] && theirs.uv[k].y == f.uv[2 * i + 1]) break;
+        if (k == theirs.uv.size() && r.dim == 0)
+          for (k = 0; k < theirs.ref.size(); ++k)
+            if (theirs.ref[k].dim == 0 && theirs.ref[k].entity == r.entity) break;
+        if (k == theirs.uv.size()) return Failed(f, "instance boundary node not found");
+        r = mine.ref[k];
+        f.xyz[3 * i] = mine.xyz[k].x, f.xyz[3 * i + 1] = mine.xyz[k].y,
+                  f.xyz[3 * i + 2] = mine.xyz[k].z;
+      }
+      gp_Vec n(f.normals[3 * i], f.normals[3 * i + 1], f.normals[3 * i + 2]);
+      n.Transform(trsf);
+      if (model.face_flipped[face_id - 1]) n.Reverse();
+      f.normals[3 * i] = n.X(), f.normals[3 * i + 1] = n.Y(), f.normals[3 * i + 2] = n.Z();
+    }
+    if (model.face_flipped[face_id - 1])
+      for (size_t t = 0; t + 2 < f.triangles.size(); t += 3)
+        std::swap(f.triangles[t + 1], f.triangles[t + 2]);
+  } catch (const Standard_Failure& e) {
+    return Failed(f, std::string("OCCT: ") + e.DynamicType()->Name());
+  } catch (const std::exception& e) {
+    return Failed(f, e.what());
+  }
+  return f;
+}
+
+}  // namespace rdmesh

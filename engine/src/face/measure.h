@@ -1,0 +1,91 @@
+#pragma once
+// How well one triangle stands for its surface patch, from surface evaluations only:
+// the estimated deviation (largest surface-triangle distance), the representation deficit a
+// split would remove, its longest edge, and whether it is valid (no fold). On a B-spline the
+// deviation also looks between the knot lines the triangle crosses and at the halves of each
+// piece: one quadratic through the edge midpoints cannot follow a cubic piece, let alone
+// several.
+
+#include "core/geom.h"
+#include "geometry/surface.h"
+
+namespace rdmesh {
+
+/// The stop criteria of face refinement; a 0 turns a criterion off.
+struct FaceCriteria {
+  double max_deviation = 0;     ///< model units
+  double rd_tolerance = 0;      ///< triangle RD (A_S - A_T) / A_T
+  double max_length = 0;        ///< longest 3D edge, model units
+  double min_length = 0;        ///< never split a triangle whose longest edge is below 2x this
+  double min_normal_cos = 0.5;  ///< a triangle's normal must lie within acos(this) of its
+                                ///< corners' surface normals (fold guard)
+};
+
+struct TriangleMeasure {
+  double deviation = 0;   ///< model units
+  double rd = 0;          ///< area gain of a split at the centroid: RD estimate; computed
+                          ///< only when FaceCriteria::rd_tolerance is on (0 otherwise)
+  double max_length = 0;  ///< longest 3D edge
+  double violation = 0;   ///< max over criteria of value / limit: <= 1 meets them all
+  double agreement = 1;   ///< TriangleAgreement, when the caller measured it
+  Vec2 worst_uv;          ///< where the deviation peaks (a good split point)
+  bool exact = false;     ///< the deviation is the surface's exact distance (sphere,
+                          ///< cylinder, cone: Surface::quadric), not an estimate from samples
+};
+
+/// Measures the triangle with corners uv[i] / xyz[i] (xyz are the nodes' mesh positions).
+TriangleMeasure MeasureTriangle(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
+                                const FaceCriteria& criteria);
+
+/// MeasureTriangle for a caller that only wants triangles whose violation stays below `limit`:
+/// false when part of the samples shows that it does not (more samples can only raise the
+/// deviation), with m->violation a lower bound >= limit; true with *m as MeasureTriangle gives
+/// it (whose violation may still reach the limit). Skips the edge-midpoint samples of a
+/// triangle whose centroid is over the limit already (then nothing else is set), and the
+/// knot-line samples of one whose other samples are.
+bool MeasureTriangleBelow(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
+                          const FaceCriteria& criteria, double limit, TriangleMeasure* m);
+
+/// How well the triangle's 3D normal agrees with the surface normals at its corners (`normals`,
+/// oriented as Su x Sv): the smallest cosine between them. kInvalid when the (u,v) orientation
+/// is not positive or the triangle is degenerate in 3D other than at a pole (two corners at one
+/// point); 1 for a pole triangle. Operations keep it above 0 (no fold) and never push it below
+/// FaceCriteria::min_normal_cos where it was above.
+constexpr double kInvalid = -2.0;
+double TriangleAgreement(const Vec2 uv[3], const Vec3 xyz[3], const Vec3 normals[3]);
+
+/// Adds to *m, measured by MeasureTriangle, what its plane heights miss where the triangle is
+/// tilted against the surface: the mesh's distance to the surface is measured along the
+/// surface's normal, a height over the triangle's plane along the plane's, which is shorter by
+/// the cosine between them (about 0.6 on a cylinder triangle whose long edge spans 46 degrees:
+/// gmsh_angled at 3e-3). At worst the surface bends within the plane of a triangle that stands
+/// against it, off its edges, where a sliver across a curved profile leaves a trench. Each
+/// edge-midpoint sample's height over its edge along the mean of the edge's corner normals
+/// (`normals`, as for TriangleAgreement) raises the deviation and violation; edge i (opposite
+/// corner i) only when bit i of `edges` is set.
+void MeasureEdgeHeights(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
+                        const Vec3 normals[3], const FaceCriteria& criteria, int edges,
+                        TriangleMeasure* m);
+
+/// The distance from points of the triangle to the surface (to the nearest surface point, as the
+/// yardstick measures it): at the centroid, the three interior points of barycentric
+/// (1/2, 1/4, 1/4) and its turns (the points the yardstick samples inside a triangle), and at the
+/// quarter points of edge i (opposite corner i) when bit i of `edges` is set. On a thin triangle
+/// tilted over an uneven parametrisation, S at a point's (u,v) weights lands well beside that
+/// point, and the plane height there (the estimate's) says little about the mesh at the point.
+/// So S is sampled at the (u,v) of every node of the barycentric grid of step 1/4, and each point
+/// gets two Gauss-Newton steps toward its nearest surface point, with S's derivatives from the
+/// grid; a point still over `suspect` gets up to six more in (u,v), with derivatives by
+/// differences and steps as long as the triangle's longest (u,v) side, within the face's bounds
+/// (the nearest point can lie in a neighbour's patch, or across the width of a sliver in (u,v)).
+/// Every distance is from the point to a surface point, so the result never reads under the
+/// distance to the (untrimmed) surface, and over it only where the search falls short. Returns
+/// the largest distance, its (u,v) into *where. Costs 16 + 2 surface points per point (at most
+/// 42), and up to 18 more per suspect point: for a final check, not for refinement's search.
+double DenseDeviation(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], int edges,
+                      double suspect, Vec2* where);
+
+/// Sum of the 3D areas of the three triangles a split at q makes, over the triangle's area.
+double SplitAreaRatio(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], Vec2 q);
+
+}  // namespace rdmesh

@@ -1,0 +1,59 @@
+#pragma once
+// The face refinement's tuning constants, one line each: the rule and why. What was measured to
+// choose them, and what was tried instead, is in docs/TUNING.md.
+#include <cstdint>
+
+namespace rdmesh {
+
+// --- Splits (refiner_split.cpp)
+// A split point keeps at least this barycentric weight on every corner (no slivers at birth).
+constexpr double kMinWeight = 0.04;
+// An optimum closer to an edge than this weight splits that edge instead (the paper's Alg. 3).
+constexpr double kEdgeWeight = 0.12;
+// A triangle this many splits deep that still violates is not split again (no-progress guard).
+constexpr int kMaxGeneration = 24;
+// ... unless its longest edge exceeds this fraction of the face box's diagonal (still large).
+constexpr double kLargeAtCap = 0.1;
+// A fold shorter than the deviation and within it is not split below this depth (no progress).
+constexpr int kSmallFoldGeneration = 6;
+// The final check (Refiner::Verify) splits in at most this many rounds.
+constexpr int kVerifyRounds = 6;
+// Below this shape quality (1 = equilateral) a triangle to refine is a sliver: reshape it first.
+constexpr double kSliverQuality = 0.02;
+// A reshaping flip must raise its triangle's normal agreement by this much (no churn).
+constexpr double kReshapeGain = 1e-3;
+
+// --- Measures and cavities (refiner.cpp)
+// Splits of standing triangles may fold children only in the first generations.
+constexpr int kFoldingGenerations = 1;
+// The violation given to a folded triangle: worse than any honest miss, so it is refined first.
+constexpr double kFoldViolation = 4.0;
+
+// --- Improvement (refiner_improve.cpp)
+// A collapse over the criteria by up to this factor is retried with its survivor moved (rarely
+// succeeds beyond; each try costs a smoothing search).
+constexpr double kCollapseSlack = 1.6;
+// At most this many flip passes before Settle's rounds; they stop at one that flips nothing.
+constexpr int kSettleFlipPasses = 5;
+// Improve stops after a round that collapses at most 1 / this of the nodes (later rounds pay
+// little).
+constexpr int kStopCollapseDivisor = 50;
+// A mover's search stops once its ring is within this fraction of the criteria (leaves slack for
+// the next collapses).
+constexpr double kMoverEnough = 0.9;
+// After the survivor's move, an attempt still over the criteria by this factor is given up.
+constexpr double kGiveUpAfterSurvivor = 1.1;
+// Rounds after this many smooth only near their collapses (smoothing everywhere mostly churns).
+constexpr int kSmoothEverywhereRounds = 1;
+
+// --- The face mesher's retries (face_mesher.cpp)
+// How many times a face left over its criteria is refined again from its own result.
+constexpr int kStuckRetries = 2;
+// A folded first triangulation's own refinement stops at this many times the triangles the
+// unfolded start's splits made (at least kFoldedStartMin).
+constexpr int64_t kFoldedStartCap = 4;
+constexpr int64_t kFoldedStartMin = 100;
+// A sphere's seed lattice is settled by this many rounds of flips and smoothing before refining.
+constexpr int kLatticeSettleRounds = 4;
+
+}  // namespace rdmesh

@@ -1,0 +1,619 @@
+#include "geometry/surface.h"
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepTools.hxx>
+#include <BRep_Tool.hxx>
+#include <BSplCLib_CacheParams.hxx>
+#include <BSplSLib.hxx>
+#include <GeomAdaptor_Surface.hxx>
+#include <GeomConvert.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <Geom_RectangularTrimmedSurface.hxx>
+#include <Geom_Surface.hxx>
+#include <Precision.hxx>
+#include <TColStd_Array2OfReal.hxx>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <gp_Cone.hxx>
+#include <gp_Cylinder.hxx>
+#include <gp_Pln.hxx>
+#include <gp_Pnt.hxx>
+#include <gp_Sphere.hxx>
+#include <gp_Vec.hxx>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+namespace rdmesh {
+
+Vec3 Surface::Normal(double u, double v) {
+  // Central differences with a step of 1e-5 of the parameter range, nudged inside the bounds;
+  // at a pole, average the normals of four points around it.
+  double du = 1e-5 * std::max(umax - umin, 1e-12), dv = 1e-5 * std::max(vmax - vmin, 1e-12);
+  auto normal_at = [&](double uu, double vv) {
+    double u0 = std::max(uu - du, umin), u1 = std::min(uu + du, umax);
+    double v0 = std::max(vv - dv, vmin), v1 = std::min(vv + dv, vmax);
+    Vec3 su = Point(u1, vv) - Point(u0, vv);
+    Vec3 sv = Point(uu, v1) - Point(uu, v0);
+    return Cross(su, sv);
+  };
+  Vec3 n = normal_at(u, v);
+  double scale = Norm(Point(std::min(u + du, umax), v) - Point(u, v)) +
+                 Norm(Point(u, std::min(v + dv, vmax)) - Point(u, v));
+  if (Norm(n) > 1e-6 * scale * scale) return Normalized(n);
+  Vec3 sum;
+  for (double s : {-1.0, 1.0}) {
+    for (double t : {-1.0, 1.0}) {
+      double uu = std::clamp(u + s * 1e3 * du, umin, umax);
+      double vv = std::clamp(v + t * 1e3 * dv, vmin, vmax);
+      sum = sum + Normalized(normal_at(uu, vv));
+    }
+  }
+  return Normalized(sum);
+}
+
+namespace {
+
+class PlaneSurface final : public Surface {
+ public:
+  Vec3 Point(double u, double v) override { return {u, v, 0}; }
+  Vec3 Normal(double, double) override { return {0, 0, 1}; }
+};
+
+class CylinderSurface final : public Surface {
+ public:
+  explicit CylinderSurface(double r) : r_(r) {
+    quadric = {Quadric::Kind::kCylinder, {0, 0, 0}, {0, 0, 1}, r};
+  }
+  Vec3 Point(double u, double v) override { return {r_ * std::cos(u), r_ * std::sin(u), v}; }
+  Vec3 Normal(double u, double) override { return {std::cos(u), std::sin(u), 0}; }
+
+ private:
+  double r_;
+};
+
+class SphereSurface final : public Surface {
+ public:
+  explicit SphereSurface(double r) : r_(r) {
+    quadric = {Quadric::Kind::kSphere, {0, 0, 0}, {0, 0, 1}, r};
+  }
+  Vec3 Point(double u, double v) override {
+    return {r_ * std::cos(v) * std::cos(u), r_ * std::cos(v) * std::sin(u), r_ * std::sin(v)};
+  }
+  Vec3 Normal(double u, double v) override {
+    return {std::cos(v) * std::cos(u), std::cos(v) * std::sin(u), std::sin(v)};
+  }
+
+ private:
+  double r_;
+};
+
+// Direct-mapped: slot = hash of the bits of (u, v); a new value overwrites the slot. The table
+// starts small (most faces are) and grows while it keeps missing, up to kMaxBits.
+class CachedSurface final : public Surface {
+ public:
+  explicit CachedSurface(std::unique_ptr<Surface> inner) : inner_(std::move(inner)) {
+    umin = inner_->umin, umax = inner_->umax, vmin = inner_->vmin, vmax = inner_->vmax;
+    uknots = inner_->uknots, vknots = inner_->vknots;
+    quadric = inner_->quadric;
+    planar = inner_->planar;
+    Resize(kMinBits);
+  }
+  Vec3 Point(double u, double v) override {
+    uint64_t ku, kv;
+    std::memcpy(&ku, &u, sizeof(u));
+    std::memcpy(&kv, &v, sizeof(v));
+    uint64_t h =
+        (ku * 0x9E3779B97F4A7C15ull) ^ ((kv + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full);
+    Entry& e = table_[h >> (64 - bits_)];
+    if (e.filled && e.u == ku && e.v == kv) return e.point;
+    Vec3 p = inner_->Point(u, v);
+    if (++misses_ > 4 * table_.size() && bits_ < kMaxBits) {
+      Resize(bits_ + 2);
+      return p;
+    }
+    e = {ku, kv, true, p};
+    return p;
+  }
+  Vec3 Normal(double u, double v) override { return inner_->Normal(u, v); }
+
+ private:
+  static constexpr int kMinBits = 8, kMaxBits = 12;
+  struct Entry {
+    uint64_t u = 0, v = 0;
+    bool filled = false;
+    Vec3 point;
+  };
+  void Resize(int bits) {
+    bits_ = bits;
+    table_.assign(size_t{1} << bits, Entry{});
+    misses_ = 0;
+  }
+  std::unique_ptr<Surface> inner_;
+  std::vector<Entry> table_;
+  int bits_ = 0;
+  size_t misses_ = 0;
+};
+
+class CircleCurve final : public Curve {
+ public:
+  CircleCurve(double r, double z0) : r_(r), z0_(z0) { shape = Shape::kCircle; }
+  Vec3 Point(double t) override { return {r_ * std::cos(t), r_ * std::sin(t), z0_}; }
+
+ private:
+  double r_, z0_;
+};
+
+Vec3 ToVec(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
+Vec3 ToVec(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }
+
+// The knot span [k[i-1], k[i]) of the distinct knots k holding t, i in [1, size - 1], the first
+// and last open-ended, into *lo, *hi; returns i. A (periodically normalised) parameter's span, as
+// both B-spline evaluators of OcctSurface take it.
+int KnotSpan(const std::vector<double>& k, double t, double* lo, double* hi) {
+  const int last = static_cast<int>(k.size()) - 1;
+  int i = static_cast<int>(std::upper_bound(k.begin(), k.end(), t) - k.begin());
+  i = std::clamp(i, 1, std::max(last, 1));
+  *lo = i > 1 ? k[i - 1] : -HUGE_VAL;
+  *hi = i < last ? k[i] : HUGE_VAL;
+  return i;
+}
+
+// S(u,v) of a B-spline surface, computed as OCCT's adaptor does it, bit for bit: BSplSLib_Cache's
+// Taylor coefficients of the knot span (built by BSplSLib::BuildCache), evaluated by Horner's rule
+// along the direction of higher degree, then the other (BSplSLib_Cache::D0 with
+// PLib::NoDerivativeEvalPolynomial). Without the adaptor's dispatch, its cache handle and the
+// library's general polynomial loops; and each span's coefficients are built once, when a point
+// first falls in it, and kept (an adaptor keeps one span and rebuilds it whenever a point falls in
+// another, which refinement does all the time: a triangle's samples straddle knot lines). Which
+// span a point takes depends on the point alone: [k_i, k_i+1) of the distinct knots after
+// periodic normalisation, the first and last spans open-ended. (An adaptor answers a point on a
+// knot line, or an ulp below it, from the span it built last, if that one holds it: there the
+// two may differ in the last bits.)
+class SpanPolynomials {
+ public:
+  explicit SpanPolynomials(const Geom_BSplineSurface& s)
+      : u_(s.UDegree(), s.IsUPeriodic(), s.UKnotSequence()),
+        v_(s.VDegree(), s.IsVPeriodic(), s.VKnotSequence()),
+        dimension_(s.Weights() ? 4 : 3),
+        size_(dimension_ * (std::max(u_.Degree, v_.Degree) + 1) *
+              (std::min(u_.Degree, v_.Degree) + 1)) {
+    const int minor = std::min(u_.Degree, v_.Degree);
+    if (minor >= 1 && minor <= 3) {
+      using Fn = decltype(horner_);
+      static constexpr Fn kFixed[2][3] = {{Horner<3, 1>, Horner<3, 2>, Horner<3, 3>},
+                                          {Horner<4, 1>, Horner<4, 2>, Horner<4, 3>}};
+      horner_ = kFixed[dimension_ - 3][minor - 1];
+    }
+  }
+
+  // (u, v) periodically normalised as BSplSLib_Cache does it.
+  void Normalize(double* u, double* v) const {
+    *u = u_.PeriodicNormalization(*u), *v = v_.PeriodicNormalization(*v);
+  }
+
+  // `uknots`, `vknots`: the surface's distinct knots (Surface::uknots.at, vknots.at).
+  Vec3 Value(const Geom_BSplineSurface& s, const std::vector<double>& uknots,
+             const std::vector<double>& vknots, double u, double v) {
+    double nu = u, nv = v;
+    Normalize(&nu, &nv);
+    // Consecutive points mostly share a span, or fall in the one before it (samples on either
+    // side of a knot line): the last two are tried first.
+    auto holds = [nu, nv](const Span* sp) {
+      return sp && sp->lo_u <= nu && nu < sp->hi_u && sp->lo_v <= nv && nv < sp->hi_v;
+    };
+    const Span* span = last_;
+    if (!holds(span)) {
+      span = holds(previous_) ? previous_ : &Find(s, uknots, vknots, nu, nv);
+      previous_ = last_, last_ = span;
+    }
+    // Parameters local to the span: BSplSLib centres it, with half its length as unit.
+    double lu = (nu - span->start_u) / span->half_u;
+    double lv = (nv - span->start_v) / span->half_v;
+    const bool u_major = u_.Degree > v_.Degree;
+    const int major = u_major ? u_.Degree : v_.Degree, minor = u_major ? v_.Degree : u_.Degree;
+    double r[4];
+    horner_(&coeffs_[span->offset], major, minor, dimension_, u_major ? lu : lv, u_major ? lv : lu,
+            r);
+    if (dimension_ == 4) r[0] /= r[3], r[1] /= r[3], r[2] /= r[3];
+    return {r[0], r[1], r[2]};
+  }
+
+ private:
+  struct Span {
+    double lo_u, hi_u, lo_v, hi_v;            // the (normalised) parameters it takes
+    double start_u, half_u, start_v, half_v;  // its centre and half length
+    size_t offset;                            // of its coefficients in coeffs_
+  };
+
+  // The span holding (nu, nv), its coefficients built on first use (BSplSLib_Cache::BuildCache
+  // for the span that OCCT locates for the span's middle).
+  const Span& Find(const Geom_BSplineSurface& s, const std::vector<double>& uknots,
+                   const std::vector<double>& vknots, double nu, double nv) {
+    Span span;
+    const int iu = KnotSpan(uknots, nu, &span.lo_u, &span.hi_u);
+    const int iv = KnotSpan(vknots, nv, &span.lo_v, &span.hi_v);
+    const uint64_t key = static_cast<uint64_t>(iu) << 32 | static_cast<uint32_t>(iv);
+    auto found = index_.find(key);
+    if (found != index_.end()) return spans_[found->second];
+    if (spans_.size() >= kMaxSpans) {  // a bound on memory; a span's coefficients never change
+      spans_.clear(), index_.clear(), coeffs_.clear();
+    }
+    index_.emplace(key, spans_.size());
+    double mu = 0.5 * (uknots[iu - 1] + uknots[iu]);
+    double mv = 0.5 * (vknots[iv - 1] + vknots[iv]);
+    u_.LocateParameter(mu, s.UKnotSequence());
+    v_.LocateParameter(mv, s.VKnotSequence());
+    const double half_u = 0.5 * u_.SpanLength, half_v = 0.5 * v_.SpanLength;
+    span.start_u = u_.SpanStart + half_u, span.half_u = half_u;
+    span.start_v = v_.SpanStart + half_v, span.half_v = half_v;
+    span.offset = coeffs_.size();
+    const int rows = std::max(u_.Degree, v_.Degree) + 1;
+    TColStd_Array2OfReal coeffs(1, rows, 1, static_cast<int>(size_) / rows);
+    BSplSLib::BuildCache(span.start_u, span.start_v, half_u, half_v, u_.IsPeriodic, v_.IsPeriodic,
+                         u_.Degree, v_.Degree, u_.SpanIndex, v_.SpanIndex, s.UKnotSequence(),
+                         s.VKnotSequence(), s.Poles(), s.Weights(), coeffs);
+    coeffs_.insert(coeffs_.end(), &coeffs(1, 1), &coeffs(1, 1) + size_);
+    spans_.push_back(span);
+    last_ = previous_ = nullptr;  // spans_ may have moved
+    return spans_.back();
+  }
+
+  // The span's polynomial at (t_major, t_minor) into r[0..dimension): Horner's rule along the
+  // direction of higher degree `major` for each of the coefficient rows' columns, then along the
+  // other (PLib::NoDerivativeEvalPolynomial twice). kDim and kMinor > 0 fix the row length, so
+  // that the compiler unrolls the columns; the arithmetic per column is the same.
+  template <int kDim, int kMinor>
+  static void Horner(const double* coeffs, int major, int minor, int dimension, double t_major,
+                     double t_minor, double r[4]) {
+    if constexpr (kMinor > 0) {
+      // Per minor index i, the first two coordinates as one pair and the rest one by one, in
+      // fixed-size arrays indexed by constants once the loops unroll, so that they stay in
+      // registers: the same operations on each element as the general loop below (a row walked
+      // by pointer went through the stack, read back at other offsets than it was written).
+      typedef double Pair __attribute__((vector_size(16)));
+      constexpr int kCols = kDim * (kMinor + 1), kRest = kDim - 2;
+      Pair pair[kMinor + 1];
+      double rest[kMinor + 1][kRest > 0 ? kRest : 1];
+      const double* c = coeffs + major * kCols;
+      auto load = [&](const double* at, int i) {
+        Pair p;
+        std::memcpy(&p, at + i * kDim, sizeof(p));
+        return p;
+      };
+      for (int i = 0; i <= kMinor; ++i) {
+        pair[i] = load(c, i);
+        for (int k = 0; k < kRest; ++k) rest[i][k] = c[i * kDim + 2 + k];
+      }
+      const Pair tm = {t_major, t_major};
+      for (int step = 0; step < major; ++step) {
+        c -= kCols;
+        for (int i = 0; i <= kMinor; ++i) {
+          pair[i] = pair[i] * tm + load(c, i);
+          for (int k = 0; k < kRest; ++k) rest[i][k] = rest[i][k] * t_major + c[i * kDim + 2 + k];
+        }
+      }
+      const Pair tn = {t_minor, t_minor};
+      Pair out = pair[kMinor];
+      double out_rest[kRest > 0 ? kRest : 1];
+      for (int k = 0; k < kRest; ++k) out_rest[k] = rest[kMinor][k];
+      for (int i = kMinor - 1; i >= 0; --i) {
+        out = out * tn + pair[i];
+        for (int k = 0; k < kRest; ++k) out_rest[k] = out_rest[k] * t_minor + rest[i][k];
+      }
+      r[0] = out[0], r[1] = out[1];
+      for (int k = 0; k < kRest; ++k) r[2 + k] = out_rest[k];
+    } else {
+      const int cols = dimension * (minor + 1);
+      double row[4 * 26];  // cols <= 4 x (BSplCLib::MaxDegree() + 1)
+      const double* c = coeffs + major * cols;
+      for (int j = 0; j < cols; ++j) row[j] = c[j];
+      for (int i = 0; i < major; ++i) {
+        c -= cols;
+        for (int j = 0; j < cols; ++j) row[j] = row[j] * t_major + c[j];
+      }
+      const double* d = row + minor * dimension;
+      for (int j = 0; j < dimension; ++j) r[j] = d[j];
+      for (int i = 0; i < minor; ++i) {
+        d -= dimension;
+        for (int j = 0; j < dimension; ++j) r[j] = r[j] * t_minor + d[j];
+      }
+    }
+  }
+
+  static constexpr size_t kMaxSpans = size_t{1} << 15;
+  BSplCLib_CacheParams u_, v_;  // the span last located (Find), and the normalisation
+  const int dimension_;         // 3, or 4 with the weight
+  const size_t size_;           // coefficients per span
+  void (*horner_)(const double*, int, int, int, double, double, double*) = Horner<0, 0>;
+  std::vector<Span> spans_;
+  std::unordered_map<uint64_t, size_t> index_;  // (u span, v span) -> spans_ index
+  std::vector<double> coeffs_;
+  const Span* last_ = nullptr;
+  const Span* previous_ = nullptr;  // the one last_ held before
+};
+
+// OCCT evaluator, with speed-ups that keep OCCT's values bit for bit. B-spline points come from
+// each knot span's polynomial, built once (SpanPolynomials). B-spline normals come from a few
+// adaptors, each kept on the span it last served: an adaptor evaluates through a polynomial cache
+// of one span and rebuilds it whenever a point falls in another; the cache content depends only
+// on the span, so the values are the same. Planes, cylinders, cones and spheres skip the
+// adaptor's dispatch.
+class OcctSurface final : public Surface {
+ public:
+  explicit OcctSurface(const Handle(Geom_Surface) & surface) : adaptor_(surface) {
+    auto frame = [&](const gp_Ax3& pos) {
+      frame_ = {pos.XDirection().XYZ(), pos.YDirection().XYZ(), pos.Direction().XYZ(),
+                pos.Location().XYZ()};
+    };
+    switch (adaptor_.GetType()) {
+      case GeomAbs_Plane:
+        frame(adaptor_.Plane().Position());
+        kind_ = Kind::kPlane;
+        planar = true;
+        break;
+      case GeomAbs_Cylinder:
+        frame(adaptor_.Cylinder().Position());
+        radius_ = adaptor_.Cylinder().Radius();
+        kind_ = Kind::kCylinder;
+        quadric = {Quadric::Kind::kCylinder, ToVec(frame_[3]), ToVec(frame_[2]), radius_};
+        break;
+      case GeomAbs_Cone: {
+        gp_Cone cone = adaptor_.Cone();
+        frame(cone.Position());
+        radius_ = cone.RefRadius();
+        // ElSLib::ConeD0 takes the sine and cosine of the semi-angle at every call: the same
+        // values each time.
+        cone_sin_ = std::sin(cone.SemiAngle());
+        cone_cos_ = std::cos(cone.SemiAngle());
+        kind_ = Kind::kCone;
+        quadric = {Quadric::Kind::kCone,
+                   ToVec(frame_[3]),
+                   ToVec(frame_[2]),
+                   radius_,
+                   cone_sin_,
+                   cone_cos_};
+        break;
+      }
+      case GeomAbs_Sphere:
+        frame(adaptor_.Sphere().Position());
+        radius_ = adaptor_.Sphere().Radius();
+        kind_ = Kind::kSphere;
+        quadric = {Quadric::Kind::kSphere, ToVec(frame_[3]), ToVec(frame_[2]), radius_};
+        v_trig_.resize(size_t{1} << kTrigBits);
+        break;
+      default:
+        break;
+    }
+    if (kind_ != Kind::kPlane && kind_ != Kind::kOther) u_trig_.resize(size_t{1} << kTrigBits);
+    if (adaptor_.GetType() != GeomAbs_BSplineSurface) return;
+    Handle(Geom_BSplineSurface) bspline = adaptor_.BSpline();
+    for (int i = 1; i <= bspline->NbUKnots(); ++i) uknots.at.push_back(bspline->UKnot(i));
+    for (int i = 1; i <= bspline->NbVKnots(); ++i) vknots.at.push_back(bspline->VKnot(i));
+    if (bspline->IsUPeriodic()) uknots.period = uknots.at.back() - uknots.at.front();
+    if (bspline->IsVPeriodic()) vknots.period = vknots.at.back() - vknots.at.front();
+    bspline_ = bspline;
+    spans_.resize(kSpans);
+    for (Span& span : spans_) span.adaptor.Load(surface);
+    polynomials_ = std::make_unique<SpanPolynomials>(*bspline);
+  }
+  Vec3 Point(double u, double v) override {
+    switch (kind_) {
+      case Kind::kPlane:
+        return PlanePoint(u, v);
+      case Kind::kCylinder:
+        return CylinderPoint(u, v);
+      case Kind::kCone:
+        return ConePoint(u, v);
+      case Kind::kSphere:
+        return SpherePoint(u, v);
+      case Kind::kOther:
+        break;
+    }
+    if (polynomials_) return polynomials_->Value(*bspline_, uknots.at, vknots.at, u, v);
+    return ToVec(adaptor_.Value(u, v));
+  }
+  Vec3 Normal(double u, double v) override {
+    gp_Pnt p;
+    gp_Vec su, sv;
+    Adaptor(u, v).D1(u, v, p, su, sv);
+    gp_Vec n = su.Crossed(sv);
+    double scale = su.SquareMagnitude() + sv.SquareMagnitude();
+    if (n.SquareMagnitude() > 1e-16 * scale * scale && scale > 0) {
+      n.Normalize();
+      return {n.X(), n.Y(), n.Z()};
+    }
+    return Surface::Normal(u, v);  // singular point: average around it
+  }
+
+ private:
+  // OCCT's evaluations of the elementary surfaces (ElSLib::PlaneD0, CylinderD0, ConeD0,
+  // SphereD0) without the adaptor's dispatch: the same arithmetic in the same order, so the same
+  // bits (surface_test checks it). The cosine and sine of each angle parameter come from a small
+  // table: refinement's probes often share one of u, v (a smoothing probe that moves along u
+  // keeps the v of every sample around it).
+  Vec3 PlanePoint(double u, double v) const {
+    const gp_XYZ &x = frame_[0], &y = frame_[1], &o = frame_[3];
+    return {u * x.X() + v * y.X() + o.X(), u * x.Y() + v * y.Y() + o.Y(),
+            u * x.Z() + v * y.Z() + o.Z()};
+  }
+  // a1 x + a2 y + a3 z + o, summed left to right as ElSLib does.
+  Vec3 InFrame(double a1, double a2, double a3) const {
+    const gp_XYZ &x = frame_[0], &y = frame_[1], &z = frame_[2], &o = frame_[3];
+    return {a1 * x.X() + a2 * y.X() + a3 * z.X() + o.X(),
+            a1 * x.Y() + a2 * y.Y() + a3 * z.Y() + o.Y(),
+            a1 * x.Z() + a2 * y.Z() + a3 * z.Z() + o.Z()};
+  }
+  Vec3 CylinderPoint(double u, double v) {
+    const CosSin& cu = Trig(u, u_trig_);
+    double a1 = radius_ * cu.cos;
+    double a2 = radius_ * cu.sin;
+    return InFrame(a1, a2, v);
+  }
+  Vec3 ConePoint(double u, double v) {
+    const CosSin& cu = Trig(u, u_trig_);
+    double r = radius_ + v * cone_sin_;
+    double a3 = v * cone_cos_;
+    double a1 = r * cu.cos;
+    double a2 = r * cu.sin;
+    return InFrame(a1, a2, a3);
+  }
+  Vec3 SpherePoint(double u, double v) {
+    const CosSin& cv = Trig(v, v_trig_);
+    const CosSin& cu = Trig(u, u_trig_);
+    double r = radius_ * cv.cos;
+    double a3 = radius_ * cv.sin;
+    double a1 = r * cu.cos;
+    double a2 = r * cu.sin;
+    return InFrame(a1, a2, a3);
+  }
+
+  // std::cos(t), std::sin(t), remembered by the bits of t in a direct-mapped table.
+  struct CosSin {
+    uint64_t key = 0;
+    bool filled = false;
+    double cos = 0, sin = 0;
+  };
+  static constexpr int kTrigBits = 9;
+  static const CosSin& Trig(double t, std::vector<CosSin>& table) {
+    uint64_t key;
+    std::memcpy(&key, &t, sizeof(t));
+    CosSin& e = table[(key * 0x9E3779B97F4A7C15ull) >> (64 - kTrigBits)];
+    if (!e.filled || e.key != key) e = {key, true, std::cos(t), std::sin(t)};
+    return e;
+  }
+
+  static constexpr int kSpans = 8;
+  struct Span {
+    double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // its knot span: [u0, u1) x [v0, v1)
+    uint64_t last_use = 0;
+    GeomAdaptor_Surface adaptor;  // for normals
+  };
+  // The adaptor to evaluate (u, v) with: for a B-spline its span's.
+  const GeomAdaptor_Surface& Adaptor(double u, double v) {
+    return spans_.empty() ? adaptor_ : SpanOf(u, v).adaptor;
+  }
+  // A B-spline's span slot for (u, v): the one on its knot span, else the least recently used
+  // one, which moves there. A slot's adaptor is put on its span's polynomial (a point in the
+  // span's middle) when the slot moves, so that a point takes its span's derivatives whatever the
+  // slot served before: an adaptor keeps its cached span for any point within it, and rebuilds at
+  // the point otherwise, where a point an ulp below a knot locates the span above.
+  Span& SpanOf(double u, double v) {
+    ++clock_;
+    polynomials_->Normalize(&u, &v);
+    Span* last = last_;  // consecutive points mostly share a span: try the last one first
+    if (last && last->u0 <= u && u < last->u1 && last->v0 <= v && v < last->v1) {
+      last->last_use = clock_;
+      return *last;
+    }
+    Span* oldest = &spans_[0];
+    for (Span& span : spans_) {
+      if (span.u0 <= u && u < span.u1 && span.v0 <= v && v < span.v1) {
+        span.last_use = clock_;
+        last_ = &span;
+        return span;
+      }
+      if (span.last_use < oldest->last_use) oldest = &span;
+    }
+    const int iu = KnotSpan(uknots.at, u, &oldest->u0, &oldest->u1);
+    const int iv = KnotSpan(vknots.at, v, &oldest->v0, &oldest->v1);
+    gp_Pnt middle;
+    oldest->adaptor.D0(0.5 * (uknots.at[iu - 1] + uknots.at[iu]),
+                       0.5 * (vknots.at[iv - 1] + vknots.at[iv]), middle);
+    oldest->last_use = clock_;
+    last_ = oldest;
+    return *oldest;
+  }
+
+  GeomAdaptor_Surface adaptor_;
+  enum class Kind { kOther, kPlane, kCylinder, kCone, kSphere };
+  Kind kind_ = Kind::kOther;             // which closed form Point() uses, if any
+  std::array<gp_XYZ, 4> frame_;          // x, y and z directions and origin of an elementary one
+  double radius_ = 0;                    // a cone's reference radius
+  double cone_sin_ = 0, cone_cos_ = 0;   // of a cone's semi-angle
+  std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
+  Handle(Geom_BSplineSurface) bspline_;  // null unless B-spline
+  std::vector<Span> spans_;              // empty unless B-spline
+  std::unique_ptr<SpanPolynomials> polynomials_;  // B-spline points
+  Span* last_ = nullptr;                          // the span slot SpanOf() returned last
+  uint64_t clock_ = 0;
+};
+
+class OcctCurve final : public Curve {
+ public:
+  explicit OcctCurve(const TopoDS_Edge& edge) : adaptor_(edge) {
+    switch (adaptor_.GetType()) {
+      case GeomAbs_Line:
+        shape = Shape::kLine;
+        break;
+      case GeomAbs_Circle:
+        shape = Shape::kCircle;
+        break;
+      default:
+        break;
+    }
+  }
+  Vec3 Point(double t) override { return ToVec(adaptor_.Value(t)); }
+
+ private:
+  BRepAdaptor_Curve adaptor_;
+};
+
+}  // namespace
+
+std::unique_ptr<Surface> MakePlaneSurface() { return std::make_unique<PlaneSurface>(); }
+std::unique_ptr<Surface> MakeCylinderSurface(double radius) {
+  return std::make_unique<CylinderSurface>(radius);
+}
+std::unique_ptr<Surface> MakeSphereSurface(double radius) {
+  return std::make_unique<SphereSurface>(radius);
+}
+std::unique_ptr<Curve> MakeCircleCurve(double radius, double z0) {
+  return std::make_unique<CircleCurve>(radius, z0);
+}
+
+std::unique_ptr<Surface> WithPointCache(std::unique_ptr<Surface> surface) {
+  return std::make_unique<CachedSurface>(std::move(surface));
+}
+
+std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs) {
+  UvBounds bounds;
+  BRepTools::UVBounds(face, bounds.umin, bounds.umax, bounds.vmin, bounds.vmax);
+  return MakeFaceSurface(face, nurbs, bounds);
+}
+
+std::unique_ptr<Surface> MakeFaceSurface(const TopoDS_Face& face, bool nurbs,
+                                         const UvBounds& bounds) {
+  Handle(Geom_Surface) surface = BRep_Tool::Surface(face);  // location applied
+  const double u0 = bounds.umin, u1 = bounds.umax, v0 = bounds.vmin, v1 = bounds.vmax;
+  if (nurbs) {
+    Handle(Geom_Surface) trimmed = new Geom_RectangularTrimmedSurface(surface, u0, u1, v0, v1);
+    surface = GeomConvert::SurfaceToBSplineSurface(trimmed);
+  }
+  auto s = std::make_unique<OcctSurface>(surface);
+  s->umin = u0;
+  s->umax = u1;
+  s->vmin = v0;
+  s->vmax = v1;
+  return s;
+}
+
+std::unique_ptr<Curve> MakeEdgeCurve(const TopoDS_Edge& edge) {
+  if (BRep_Tool::Degenerated(edge)) return nullptr;
+  // BRepAdaptor_Curve falls back to the curve on a surface when there is no 3D curve.
+  return std::make_unique<OcctCurve>(edge);
+}
+
+Vec2 IntoSurfaceRange(const Adaptor3d_Surface& surface, Vec2 uv) {
+  auto within = [](double x, double first, double last, bool periodic) {
+    if (periodic || Precision::IsInfinite(first) || Precision::IsInfinite(last)) return x;
+    return std::clamp(x, first, last);
+  };
+  return {within(uv.x, surface.FirstUParameter(), surface.LastUParameter(), surface.IsUPeriodic()),
+          within(uv.y, surface.FirstVParameter(), surface.LastVParameter(), surface.IsVPeriodic())};
+}
+
+}  // namespace rdmesh
