@@ -2,16 +2,20 @@
 """rdmesh benchmark: triangles and seconds to reach a max deviation, against BRepMesh and Gmsh.
 
   /usr/bin/python3 bench/run_bench.py [--quick] [--models NAME ...] [--out bench/RESULTS.md]
+  /usr/bin/python3 bench/run_bench.py --results-only RESULTS.json [--out bench/RESULTS.md]
 
 For each model and mesher a ladder of settings is run and every mesh is scored by the independent
-yardstick (/work/shared/yardstick/meshbench eval). Along each mesher's Pareto front of
+yardstick (meshbench eval, built by scripts/yardstick.sh). Along each mesher's Pareto front of
 (triangles, hausdorff_rel) the triangles and seconds needed for a max deviation of 1e-3 and 1e-4 of
-the bbox diagonal are interpolated log-log; the report gives them per model, the ratios
-rdmesh/BRepMesh and rdmesh/Gmsh, their geometric means, and the failures seen (faces left
-uncovered, free edges on closed models, inverted triangles, errors, timeouts). See bench/README.md.
+the bbox diagonal are interpolated log-log. Every run saves its results as JSON (--results,
+default BUILD/bench_results.json) and writes bench/RESULTS.md from that file alone: the ratios
+rdmesh/BRepMesh and rdmesh/Gmsh and their geometric means, the analytic models against their
+minimum, delivered against requested deviation, and the runs that are not clean (faces left
+uncovered, free edges on closed models, inverted triangles, deviation over 1.2x the request,
+errors, timeouts). --results-only re-renders RESULTS.md from a saved file. See bench/README.md.
 
 Meshers:
-  rdmesh    the CLI (build-bench/bin/rdmesh), --max-deviation-rel ladder, --threads N
+  rdmesh    the CLI (built from a clean export of --rdmesh-rev), --max-deviation-rel ladder
   brepmesh  bench/brepmesh_runner (OCCT BRepMesh linked), absolute deflection ladder x angles
   gmsh      Debian's python3-gmsh through the yardstick's anchors.py (curvature sizing ladder)
 Anchor records (brepmesh, gmsh) are cached in BUILD/bench_cache.jsonl; rdmesh records too, keyed
@@ -328,25 +332,7 @@ def summarize(records, info):
             d[f"tris@{eps:g}"] = interpolate(fr, eps, "triangles")
             d[f"secs@{eps:g}"] = interpolate(fr, eps, "seconds")
         closed = info.get("brep_free_edges", 1) == 0
-        problems = []
-        for r in mine:
-            p = []
-            if "error" in r:
-                p.append(" ".join(r["error"].split())[:90])
-            else:
-                if r.get("faces_covered", 0) < r.get("faces", 0):
-                    p.append(f"{r['faces'] - r['faces_covered']} of {r['faces']} faces uncovered")
-                if closed and r.get("free_edges", 0) > 0:
-                    p.append(f"{r['free_edges']} free edges (closed model)")
-                if r.get("inverted", 0) > 0:
-                    p.append(f"{r['inverted']} inverted")
-                if r.get("faces_failed", 0):
-                    p.append(f"{r['faces_failed']} faces failed (rdmesh report)")
-                if mesher == "rdmesh" and "tol" in r and r["hausdorff_rel"] > 1.1 * r["tol"]:
-                    p.append(f"deviation {r['hausdorff_rel']:.3g} > requested {r['tol']:g}")
-            if p:
-                problems.append((r["setting"], p))
-        d["problems"] = problems
+        d["problems"] = [(r["setting"], p) for r in mine for p in [defects(r, closed)] if p]
         s[mesher] = d
     return s
 
@@ -367,7 +353,13 @@ def fmt_s(x):
 
 
 def fmt_r(x):
-    return "—" if x is None else f"{x:.2f}"
+    return "—" if x is None else (f"{x:.2f}" if x >= 0.1 else f"{x:.2g}")
+
+
+def fmt_eps(x):
+    """1e-3 rather than 0.001."""
+    m, e = f"{x:.0e}".split("e")
+    return f"{m}e{int(e)}"
 
 
 def ratio(x, y):
@@ -391,142 +383,200 @@ def git(*args):
         return "?"
 
 
-def report(a, models, infos, summaries, records, meta):
-    ms = [m for m in a.meshers]
+RESULTS_FORMAT = 1
+LADDER_TOLS = [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5]
+MAX_LINES = 200
+
+
+def defects(r, closed):
+    """Why a run is not clean, empty when it is: a clean run is one a user could take as it is, no
+    error, every face covered, no free edge on a closed B-rep, no inverted triangle, and a measured
+    deviation within 1.2x of what was asked (rdmesh: its tolerance; BRepMesh: its deflection; Gmsh
+    asks for no deviation). None for a run that was not scored (over --score-cap)."""
+    if r.get("over_cap"):
+        return None
+    if "error" in r:
+        return [" ".join(r["error"].split())[:90]]
+    p = []
+    if r.get("faces_covered", 0) < r.get("faces", 0):
+        p.append(f"{r['faces'] - r['faces_covered']} of {r['faces']} faces uncovered")
+    if closed and r.get("free_edges", 0) > 0:
+        p.append(f"{r['free_edges']} free edges (closed model)")
+    if r.get("inverted", 0) > 0:
+        p.append(f"{r['inverted']} inverted")
+    asked = r.get("tol", r.get("deflection_rel"))
+    if asked is not None and r["hausdorff_rel"] > 1.2 * asked:
+        p.append(f"deviation {r['hausdorff_rel'] / asked:.2f}x the request")
+    return p
+
+
+def results_of(a, models, infos, summaries, records, meta):
+    """Everything render() reads: the input of RESULTS.md, saved as JSON by every run."""
+    settings = {"meshers": list(a.meshers), "threads": a.threads, "timeout": a.timeout,
+                "score_cap": a.score_cap, "repeat_below": a.repeat_below, "repeats": a.repeats,
+                "rdmesh": os.path.relpath(a.rdmesh, REPO) if a.rdmesh.startswith(REPO) else a.rdmesh}
+    return {"format": RESULTS_FORMAT, "meta": meta, "settings": settings, "models": models,
+            "infos": infos, "summary": summaries, "records": records}
+
+
+def render(res):
+    """RESULTS.md from a run's results (results_of): one current table, at most MAX_LINES lines."""
+    meta, st, models = res["meta"], res["settings"], res["models"]
+    infos, summaries, records = res["infos"], res["summary"], res["records"]
+    ms = st["meshers"]
     anchors = [m for m in ms if m != "rdmesh"]
-    L = []
-    L.append("# rdmesh benchmark results\n")
-    L.append(f"- Date: {meta['date']} (run took {meta['elapsed'] / 60:.1f} min)")
-    L.append(f"- Machine: {meta['nproc']} cores, {meta['cpu']}; load average at start {meta['load0']}, at end {meta['load1']} "
-             "(the machine is shared, so seconds are indicative)")
-    if meta["measured_rev"] == "working tree":
-        L.append(f"- rdmesh measured: the working tree at commit `{meta['head']}`"
-                 + (f", with uncommitted changes in engine/ or clients/cli/ ({meta['dirty']})" if meta["dirty"] else ", clean"))
+    corpus = [m for m in models if m not in ANALYTIC]
+    analytic = [m for m in models if m in ANALYTIC]
+
+    def fig(name, mesher, key, eps):
+        return summaries.get(name, {}).get(mesher, {}).get(f"{key}@{eps:g}")
+
+    def ratios(key, anchor, eps):
+        out = {}
+        for name in corpus:
+            r = ratio(fig(name, "rdmesh", key, eps), fig(name, anchor, key, eps))
+            if r:
+                out[name] = r
+        return out
+
+    def short(name):
+        return os.path.splitext(name)[0]
+
+    L = ["# rdmesh benchmark results", ""]
+    L.append("Written by `bench/run_bench.py` from the results file below; the next run overwrites it, "
+             "so edit the writer, not this file. Re-render without meshing: "
+             "`/usr/bin/python3 bench/run_bench.py --results-only RESULTS.json`. How the figures are "
+             "made: [README.md](README.md).")
+    L.append("")
+    if meta["measured_rev"] == "binary":
+        what = (f"the binary `{st['rdmesh']}`" + (f", built at commit `{meta['rdmesh_commit']}`"
+                                                   if meta.get("rdmesh_commit") else "") +
+                f" (repository at `{meta['head']}`)")
+    elif meta["measured_rev"] == "working tree":
+        what = f"the working tree at `{meta['head']}`" + (
+            f", with uncommitted changes in engine/ or clients/cli/ ({meta['dirty']})" if meta["dirty"] else "")
     else:
-        L.append(f"- rdmesh measured: commit `{meta['measured_rev']}` (the last commit touching engine/ or clients/cli/ "
-                 f"at HEAD `{meta['head']}`; built from a clean export of it)")
-    L.append(f"- rdmesh binary: `{os.path.relpath(a.rdmesh, REPO)}` (sha256 {meta['rdmesh_sha']}), `--threads {a.threads}`; "
-             f"BRepMesh: OCCT {meta['occt']} via `bench/brepmesh_runner` (InParallel); Gmsh {meta['gmsh']} "
-             f"(Debian python3-gmsh {meta['gmsh_deb']}, 2 threads); allocators: {meta.get('malloc', '?')}")
-    L.append(f"- Command: `{meta['command']}`")
-    times = sorted(r["measured"] for r in records if "measured" in r)
-    if times:
-        L.append(f"- Records: {len(records)} meshing runs, measured between {times[0]} and {times[-1]} (anchor and "
-                 "unchanged-rdmesh results come from the cache in build-bench/bench_cache.jsonl, so a rerun takes "
-                 "less time than the measurements did).")
-    L.append(f"- Per-run timeout {a.timeout:g} s; meshes over {a.score_cap:,} triangles are not scored (scoring B-spline "
-             "faces runs at a few thousand triangles per second) and end their ladder; ladders also stop once a mesh reaches 1e-4.")
-    L.append("- Scorer: `meshbench eval` from /work/shared/yardstick, built by `scripts/yardstick.sh` (max deviation over the bbox diagonal, sampled at centroids, "
-             "edge midpoints and an interior lattice of every triangle).\n")
-    L.append("Figures are interpolated log-log along each mesher's Pareto front of (triangles, deviation) at a max "
-             "deviation of 1e-3 and 1e-4 of the bbox diagonal. `—` = not reached by the ladder. Ratios < 1 mean rdmesh "
-             "needs fewer triangles (or seconds). Seconds are meshing only (no file loading or writing)"
-             + (f"; a run under {a.repeat_below:g} s is the median of {a.repeats} timed runs of the same command, "
-                "for every mesher alike" if a.repeat_below > 0 and a.repeats > 1 else "") + ".\n")
+        what = f"commit `{meta['measured_rev']}` (built from a clean export; repository at `{meta['head']}`)"
+    peers = []
+    if "brepmesh" in ms:
+        peers.append(f"BRepMesh of OCCT {meta['occt']} (`bench/brepmesh_runner`, InParallel)")
+    if "gmsh" in ms:
+        peers.append(f"Gmsh {meta['gmsh']} (Debian python3-gmsh {meta['gmsh_deb']}, 2 threads)")
+    fresh = sum(1 for r in records if r.get("measured", "") >= meta.get("started", "~"))
+    L += ["| | |", "|---|---|",
+          f"| rdmesh measured | {what}; `--threads {st['threads']}`; sha256 {meta['rdmesh_sha']} |",
+          f"| peers | {'; '.join(peers) or 'none'}; allocators: {meta.get('malloc', '?')} |",
+          f"| machine | {meta['nproc']} cores, {meta['cpu']}; load average {meta['load0']} at the start, "
+          f"{meta['load1']} at the end (a shared machine: seconds are indicative, triangles exact) |",
+          f"| run | ended {meta['date']} after {meta['elapsed'] / 60:.0f} min; {len(records)} meshing runs, "
+          f"{fresh} of them measured in this run, the others from the cache |",
+          f"| command | `{meta['command']}` |",
+          f"| results file | `{meta.get('results', '?')}` |", ""]
 
-    def table(title, key, fmt, corpus_models):
-        L.append(f"### {title}\n")
-        head = ["model", "faces"]
-        for eps in TARGETS:
-            head += [f"{LABELS[m]} @{eps:g}" for m in ms] + [f"rd/{LABELS[m]} @{eps:g}" for m in anchors]
-        L.append("| " + " | ".join(head) + " |")
-        L.append("|" + "---|" * 2 + "---:|" * (len(head) - 2))
-        rat = {(m, eps): [] for m in anchors for eps in TARGETS}
-        for name in corpus_models:
-            s = summaries[name]
-            row = [f"`{name}`", str(infos[name]["faces"])]
-            for eps in TARGETS:
-                vals = {m: s.get(m, {}).get(f"{key}@{eps:g}") for m in ms}
-                row += [fmt(vals[m]) for m in ms]
-                for m in anchors:
-                    r = ratio(vals.get("rdmesh"), vals[m])
-                    rat[(m, eps)].append(r)
-                    row.append(fmt_r(r))
-            L.append("| " + " | ".join(row) + " |")
-        row = ["**geometric mean**", ""]
-        for eps in TARGETS:
-            row += [""] * len(ms)
-            for m in anchors:
-                vs = [x for x in rat[(m, eps)] if x]
-                g = geomean(vs)
-                row.append(f"**{fmt_r(g)}** (n={len(vs)})" if g else "—")
-        L.append("| " + " | ".join(row) + " |")
-        L.append("")
-        return rat
-
-    corpus_models = [m for m in models if m not in ANALYTIC]
-    analytic_models = [m for m in models if m in ANALYTIC]
-    if corpus_models:
-        L.append(f"## Corpus models ({len(corpus_models)})\n")
-        tri_rat = table("Triangles", "tris", fmt_n, corpus_models)
-        sec_rat = table("Seconds (meshing time at the same deviation)", "secs", fmt_s, corpus_models)
-        L.append("### Geometric means of the ratios (rdmesh / anchor)\n")
-        L.append("| ratio | triangles @1e-3 | triangles @1e-4 | seconds @1e-3 | seconds @1e-4 |")
-        L.append("|---|---:|---:|---:|---:|")
-        for m in anchors:
+    L.append("## Headline\n")
+    L.append("rdmesh / peer, geometric mean over the corpus models where both reach the target (n); each "
+             "figure interpolated along the mesher's Pareto front at a measured deviation of 1e-3 and 1e-4 "
+             "of the bounding-box diagonal. Below 1, rdmesh needs fewer.\n")
+    L += ["| | @1e-3 | @1e-4 |", "|---|---:|---:|"]
+    for m in anchors:
+        for key, what in (("tris", "triangles"), ("secs", "seconds")):
             cells = []
-            for rat in (tri_rat, sec_rat):
-                pass
-            cells = [tri_rat[(m, 1e-3)], tri_rat[(m, 1e-4)], sec_rat[(m, 1e-3)], sec_rat[(m, 1e-4)]]
-            L.append(f"| rdmesh/{LABELS[m]} | " + " | ".join(
-                f"{fmt_r(geomean(c))} (n={len([x for x in c if x])})" for c in cells) + " |")
-        L.append("")
-    if analytic_models:
-        L.append("## Analytic models against the theoretical minimum\n")
-        L.append("Triangles at the target deviation; in brackets the ratio to the minimum. Unit sphere: ~1396 triangles "
-                 "at 1e-3 of the diagonal, scaling as 1/deviation (13,960 at 1e-4). Cylinder r=1 h=4: n = ceil(pi / "
-                 "acos(1 - eps*diag)) segments per circle, 2n side triangles + 2(n-2) in the caps.\n")
-        head = ["model", "target", "minimum"] + [LABELS[m] for m in ms]
-        L.append("| " + " | ".join(head) + " |")
-        L.append("|---|---|" + "---:|" * (len(head) - 2))
-        for name in analytic_models:
             for eps in TARGETS:
-                mn = theoretical_minimum(name, eps)
-                row = [f"`{name}` ({ANALYTIC[name]})", f"{eps:g}", fmt_n(mn)]
-                for m in ms:
-                    v = summaries[name].get(m, {}).get(f"tris@{eps:g}")
-                    row.append(f"{fmt_n(v)} ({v / mn:.2f}x)" if v and mn else fmt_n(v))
-                L.append("| " + " | ".join(row) + " |")
-        L.append("")
+                rs = ratios(key, m, eps)
+                g = geomean(list(rs.values()))
+                cells.append(f"**{fmt_r(g)}** (n={len(rs)})" if g else "—")
+            L.append(f"| {what}, rdmesh / {LABELS[m]} | " + " | ".join(cells) + " |")
+        cells = []
+        for eps in TARGETS:
+            rs = ratios("secs", m, eps)
+            worst = max(rs, key=rs.get) if rs else None
+            cells.append(f"{fmt_r(rs[worst])} `{short(worst)}`" if worst else "—")
+        L.append(f"| largest seconds ratio, rdmesh / {LABELS[m]} | " + " | ".join(cells) + " |")
+    for name in analytic:
+        cells = []
+        for eps in TARGETS:
+            v, mn = fig(name, "rdmesh", "tris", eps), theoretical_minimum(name, eps)
+            cells.append(f"{v / mn:.2f}x ({fmt_n(v)})" if v and mn else "—")
+        L.append(f"| {ANALYTIC[name]}, rdmesh triangles / minimum | " + " | ".join(cells) + " |")
+    rd = [r for r in records if r["mesher"] == "rdmesh" and "hausdorff_rel" in r and "tol" in r]
 
-    # rdmesh: requested vs measured deviation
-    rd = [r for r in records if r["mesher"] == "rdmesh" and "hausdorff_rel" in r]
+    def worst_delivered(tols):
+        xs = [(r["hausdorff_rel"] / r["tol"], r["model"]) for r in rd if r["tol"] in tols]
+        if not xs:
+            return "—"
+        x, name = max(xs)
+        return f"{x:.2f}" + (f" `{short(name)}`" if x > 1.0 else "")
+
     if rd:
-        L.append("## rdmesh: requested vs measured deviation\n")
-        L.append("Measured max deviation (yardstick) over the requested `--max-deviation-rel`, per run; > 1 means the "
-                 "mesh misses the requested deviation.\n")
-        L.append("| model | " + " | ".join(f"tol {t:g}" for t in [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5]) + " |")
-        L.append("|---|" + "---:|" * 6)
+        L.append(f"| delivered / requested deviation, rdmesh, largest over the {len(models)} models | "
+                 + " | ".join(worst_delivered([eps]) for eps in TARGETS) + " |")
+    L.append("")
+    if rd:
+        L.append(f"- Delivered / requested over every step of rdmesh's ladder ({fmt_eps(LADDER_TOLS[0])} to "
+                 f"{fmt_eps(min(r['tol'] for r in rd))}): at most {worst_delivered(LADDER_TOLS)}.")
+    clean_cells = []
+    for m in ms:
+        verdicts = [defects(r, infos[r["model"]].get("brep_free_edges", 1) == 0)
+                    for r in records if r["mesher"] == m and r["model"] in infos]
+        scored = [v for v in verdicts if v is not None]
+        clean_cells.append(f"{LABELS[m]} {sum(1 for v in scored if not v)} of {len(scored)}")
+    L.append("- Clean runs, every step of every ladder (bench/README.md, \"Clean\"): " + ", ".join(clean_cells) + ".")
+    L.append("")
+
+    head = ["model", "faces"]
+    for key in ("triangles", "seconds"):
+        head += [f"{key} {LABELS[m]}" for m in ms] + [f"rd/{LABELS[m]}" for m in anchors]
+    for eps in TARGETS:
+        L.append(f"## Per model at {fmt_eps(eps)}\n")
+        L.append("| " + " | ".join(head) + " |")
+        L.append("|---|---:|" + "---:|" * (len(head) - 2))
+        for name in models:
+            row = [f"`{short(name)}`", str(infos[name]["faces"])]
+            for key, fmt in (("tris", fmt_n), ("secs", fmt_s)):
+                row += [fmt(fig(name, m, key, eps)) for m in ms]
+                row += [fmt_r(ratio(fig(name, "rdmesh", key, eps), fig(name, m, key, eps))) for m in anchors]
+            L.append("| " + " | ".join(row) + " |")
+        L.append("")
+    if analytic:
+        L.append("Analytic minimum: unit sphere ~1,396 triangles at 1e-3 of the diagonal, scaling as "
+                 "1/deviation; cylinder r=1 h=4: n = ceil(pi / acos(1 - eps diag)) segments per circle, "
+                 "2n side triangles and n-2 per cap.\n")
+
+    if rd:
+        L.append("## Delivered / requested deviation, rdmesh\n")
+        L.append("The yardstick's measured deviation over the requested `--max-deviation-rel`, every step "
+                 "of the ladder (a ladder stops once 1e-4 is met); bold above 1.\n")
+        L.append("| model | " + " | ".join(fmt_eps(t) for t in LADDER_TOLS) + " |")
+        L.append("|---|" + "---:|" * len(LADDER_TOLS))
         for name in models:
             cells = []
-            for t in [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5]:
-                r = next((r for r in rd if r["model"] == name and r.get("tol") == t), None)
+            for t in LADDER_TOLS:
+                r = next((r for r in rd if r["model"] == name and r["tol"] == t), None)
                 if r is None:
-                    e = next((r for r in records if r["mesher"] == "rdmesh" and r["model"] == name and r.get("tol") == t), None)
+                    e = any(x["mesher"] == "rdmesh" and x["model"] == name and x.get("tol") == t for x in records)
                     cells.append("error" if e else "")
                 else:
                     x = r["hausdorff_rel"] / t
-                    cells.append(f"**{x:.2f}**" if x > 1.1 else f"{x:.2f}")
-            L.append(f"| `{name}` | " + " | ".join(cells) + " |")
+                    cells.append(f"**{x:.2f}**" if x > 1.0 else f"{x:.2f}")
+            L.append(f"| `{short(name)}` | " + " | ".join(cells) + " |")
         L.append("")
 
-    L.append("## Failures and defects\n")
-    L.append("Every run with faces left uncovered, free edges on a closed model (the B-rep has no free edges), "
-             "inverted triangles, faces the mesher reported failed, errors or timeouts; for rdmesh also a measured "
-             "deviation more than 10% above the requested one.\n")
-    any_problem = False
+    L.append("## Runs that are not clean\n")
+    problems = []
     for name in models:
         for m in ms:
             probs = summaries[name].get(m, {}).get("problems", [])
-            if not probs:
-                continue
-            any_problem = True
-            closed = "closed" if infos[name].get("brep_free_edges", 1) == 0 else "open"
-            items = "; ".join(f"{lab}: {', '.join(p)}" for lab, p in probs[:8])
-            more = f"; … {len(probs) - 8} more runs" if len(probs) > 8 else ""
-            L.append(f"- `{name}` ({closed}) **{LABELS[m]}** ({len(probs)} of {summaries[name][m]['runs']} runs): {items}{more}")
-    if not any_problem:
-        L.append("None.")
+            if probs:
+                items = "; ".join(f"{lab}: {', '.join(p)}" for lab, p in probs[:3])
+                more = f"; {len(probs) - 3} more" if len(probs) > 3 else ""
+                problems.append(f"- `{short(name)}` {LABELS[m]} ({len(probs)} of "
+                                f"{summaries[name][m]['runs']} runs): {items}{more}")
+    # The default set fits in MAX_LINES; larger sets grow the per-model tables, and then this list
+    # is the part that gives way.
+    room = max(1, MAX_LINES - len(L) - 2)
+    if len(problems) > room:
+        problems = problems[:room - 1] + [f"- … {len(problems) - room + 1} more in the results file"]
+    L += problems or ["None."]
     L.append("")
     return "\n".join(L)
 
@@ -566,6 +616,13 @@ def main():
                     help="commit whose rdmesh is measured, built from a clean export in BUILD/snapshot/ "
                          "(default HEAD); 'worktree' = the working tree as it is, built in BUILD")
     ap.add_argument("--rdmesh", default=None, help="an rdmesh binary to measure instead (no build)")
+    ap.add_argument("--rdmesh-commit", default=None,
+                    help="with --rdmesh: the commit the binary was built from, named in the report")
+    ap.add_argument("--results", default=None,
+                    help="where the run's results are saved as JSON, the input of RESULTS.md "
+                         "(default BUILD/bench_results.json)")
+    ap.add_argument("--results-only", metavar="FILE.json", default=None,
+                    help="write --out from a saved results file, without building or meshing")
     ap.add_argument("--meshers", default="rdmesh,brepmesh,gmsh")
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 2, help="rdmesh --threads (default nproc)")
     ap.add_argument("--timeout", type=float, default=300, help="seconds per meshing run (default 300)")
@@ -580,7 +637,21 @@ def main():
     ap.add_argument("--fresh", action="store_true", help="rerun rdmesh even when the cache has this binary's results")
     ap.add_argument("--no-cache", action="store_true")
     a = ap.parse_args()
+    if a.results_only:
+        with open(a.results_only) as f:
+            res = json.load(f)
+        if res.get("format") != RESULTS_FORMAT:
+            sys.exit(f"{a.results_only}: not a results file of this run_bench.py (format {res.get('format')})")
+        md = render(res)
+        if a.out:
+            with open(a.out, "w") as f:
+                f.write(md)
+            log(f"wrote {a.out} from {a.results_only}")
+        else:
+            print(md)
+        return
     t_start = time.time()
+    started = datetime.datetime.now().isoformat(timespec="seconds")
     load0 = " ".join(open("/proc/loadavg").read().split()[:3])
 
     a.brepmesh_runner = os.path.join(a.build_dir, "bin", "brepmesh_runner")
@@ -592,7 +663,7 @@ def main():
     MESHBENCH, ANCHORS = os.path.join(built, "meshbench"), os.path.join(built, "anchors.py")
     if not a.no_build:
         cmake_build(REPO, a.build_dir, ["brepmesh_runner"] + (["rdmesh"] if a.rdmesh_rev == "worktree" else []))
-    a.measured_rev = "working tree"
+    a.measured_rev = "working tree" if a.rdmesh is None else "binary"
     if a.rdmesh is None and a.rdmesh_rev != "worktree":
         # The newest commit at or before REV that changed what rdmesh is built from: commits
         # elsewhere (docs, server, tests) reuse the same build and cached results.
@@ -659,11 +730,14 @@ def main():
     dirty = git("status", "--porcelain", "--", "engine", "clients/cli")
     meta = {
         "date": datetime.datetime.now().strftime("%Y-%m-%d %H:%M %Z").strip() or time.ctime(),
+        "started": started, "rdmesh_commit": a.rdmesh_commit,
         "elapsed": time.time() - t_start,
         "nproc": os.cpu_count(), "cpu": cpu_model(), "load0": load0,
         "load1": " ".join(open("/proc/loadavg").read().split()[:3]),
         "head": git("rev-parse", "--short=10", "HEAD"), "measured_rev": a.measured_rev,
-        "engine_commit": git("log", "-1", "--format=%h", a.measured_rev if a.measured_rev != "working tree" else "HEAD", "--", "engine"),
+        "engine_commit": git("log", "-1", "--format=%h",
+                             a.measured_rev if a.measured_rev not in ("working tree", "binary") else "HEAD",
+                             "--", "engine"),
         "dirty": a.measured_rev == "working tree" and len(dirty.splitlines()) and f"{len(dirty.splitlines())} files",
         "rdmesh_sha": tools["rdmesh"].replace("rdmesh-", ""),
         "occt": occt, "gmsh": gmsh_version,
@@ -673,20 +747,17 @@ def main():
         "command": "/usr/bin/python3 " + " ".join(shlex.quote(x) for x in
                                                    [os.path.relpath(sys.argv[0], REPO) if sys.argv[0].startswith(REPO) else sys.argv[0]] + sys.argv[1:]),
     }
-    md = report(a, models, infos, summaries, records, meta)
-    # A hand-written "## Discussion" in the previous report is kept (it names the run it discusses).
-    if a.out and os.path.exists(a.out):
-        old = open(a.out).read()
-        if "\n## Discussion" in old:
-            md += "\n## Discussion" + old.split("\n## Discussion", 1)[1].rstrip() + "\n"
+    results = a.results or os.path.join(a.build_dir, "bench_results.json")
+    meta["results"] = os.path.relpath(results, REPO) if os.path.abspath(results).startswith(REPO) else results
+    res = results_of(a, models, infos, summaries, records, meta)
+    with open(results, "w") as f:
+        json.dump(res, f, indent=1)
+    md = render(res)
     print(md)
     if a.out:
         with open(a.out, "w") as f:
             f.write(md)
-        raw = os.path.join(a.build_dir, "bench_last_run.json")
-        with open(raw, "w") as f:
-            json.dump({"meta": meta, "models": infos, "summary": summaries, "records": records}, f, indent=1)
-        log(f"wrote {a.out} and {raw}")
+    log(f"wrote {results}" + (f" and {a.out}" if a.out else ""))
 
 
 if __name__ == "__main__":
