@@ -124,7 +124,7 @@ def main():
     parser.add_argument("--cache", action="store_true",
                         help="read the model from a --cache-dir that a first, unreported run "
                              "fills, so a round takes about a second (the cached model meshes "
-                             "slower: see bench/RESULTS.md)")
+                             "slower: see docs/TUNING.md, Threads)")
     args = parser.parse_args()
     if args.in_process:
         sys.exit(in_process(args))
