@@ -109,6 +109,7 @@ Result<std::shared_ptr<const Model>> Load(const CommonFlags& flags, Context* con
       std::cerr << "rdmesh: warning: " << outcome.problem << "\n";
   }
   run->load_seconds = SecondsSince(start);
+  if (model.ok()) run->load_stages = GetModelInfo(**model).load_stages;
   return model;
 }
 
@@ -127,6 +128,7 @@ int RunInfoCommand(const CommonFlags& flags) {
   if (flags.json) {
     nlohmann::ordered_json json = ModelInfoJson(info);
     json["load_seconds"] = run.load_seconds;
+    json["load_stages"] = LoadStagesJson(run);
     AddStoreJson(run, &json);
     std::cout << json.dump() << std::endl;
   } else if (!flags.quiet) {
@@ -264,6 +266,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   if (flags.json && !levels->empty()) {
     nlohmann::ordered_json json = {{"model", flags.model},
                                    {"load_seconds", run.load_seconds},
+                                   {"load_stages", LoadStagesJson(run)},
                                    {"mesh_cpu_seconds", run.mesh_cpu_seconds},
                                    {"levels", std::move(level_reports)}};
     AddStoreJson(run, &json);

@@ -51,6 +51,12 @@ nlohmann::ordered_json ModelInfoJson(const ModelInfo& info) {
   };
 }
 
+nlohmann::ordered_json LoadStagesJson(const RunInfo& run) {
+  nlohmann::ordered_json stages = nlohmann::ordered_json::object();
+  for (const auto& [stage, seconds] : run.load_stages) stages[stage] = seconds;
+  return stages;
+}
+
 void AddStoreJson(const RunInfo& run, nlohmann::ordered_json* json) {
   if (!run.store_used) return;
   (*json)["from_store"] = run.from_store;
@@ -84,6 +90,7 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
       {"edge_seconds", s.edge_seconds},
       {"face_seconds", s.face_seconds},
       {"load_seconds", run.load_seconds},
+      {"load_stages", LoadStagesJson(run)},
       {"write_seconds", run.write_seconds},
       {"mesh_cpu_seconds", run.mesh_cpu_seconds},
       {"requested_deviation", s.requested_deviation},

@@ -4,6 +4,8 @@
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "rdmesh/engine.h"
 
@@ -13,7 +15,9 @@ namespace rdmesh::cli {
 struct RunInfo {
   std::string model_path;
   std::string output_path;
-  double load_seconds = 0.0;   ///< reading the model file
+  double load_seconds = 0.0;  ///< reading the model file
+  /// The load's stages (ModelInfo::load_stages), reported as --json's load_stages.
+  std::vector<std::pair<std::string, double>> load_stages;
   double write_seconds = 0.0;  ///< writing the output file
   /// CPU time (user + system, all threads) of this process while meshing: the engine's time
   /// without the waits a loaded machine adds to the wall-clock `seconds`. For --lod, all levels.
@@ -22,6 +26,9 @@ struct RunInfo {
   bool from_store = false;    ///< the model was read from the store, not parsed
   std::string store_problem;  ///< a discarded or unwritable store entry; "" when none
 };
+
+/// The load's stages as one JSON object, stage -> seconds, in load order.
+nlohmann::ordered_json LoadStagesJson(const RunInfo& run);
 
 /// Adds from_store (and store_problem when there was one) to `json` when the run used a store.
 void AddStoreJson(const RunInfo& run, nlohmann::ordered_json* json);

@@ -5,6 +5,7 @@
 #include <array>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rdmesh {
@@ -27,6 +28,10 @@ struct ModelInfo {
   std::map<std::string, int> surface_types;  ///< SurfaceTypeName -> face count
   std::vector<std::string> part_names;       ///< names of the parts (XCAF labels)
   bool closed = false;                       ///< every edge bounds exactly two faces (seams aside)
+  /// Where the load's time went, in order (stage, seconds): the reader's stages (e.g.
+  /// occt_parse, occt_transfer), canonical (the round trip through the stored form), model (ids,
+  /// areas, box). A model read from the store has only its own stages.
+  std::vector<std::pair<std::string, double>> load_stages;
 };
 
 /// Model file formats.

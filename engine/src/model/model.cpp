@@ -174,6 +174,7 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
                                                 const std::string& name,
                                                 const std::string& display_name,
                                                 const DerivedValues* derived) {
+  const auto start = std::chrono::steady_clock::now();
   auto model = std::make_shared<Model>();
   model->shape = read.shape;
   model->doc = read.doc;
@@ -213,6 +214,8 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
   model->info.format = FormatName(format);
   model->info.length_unit = read.length_unit;
   model->info.unit_scale_mm = read.unit_scale_mm;
+  model->info.load_stages = std::move(read.stages);
+  model->info.load_stages.emplace_back("model", StageSeconds(start));
   return std::shared_ptr<const Model>(std::move(model));
 }
 
@@ -232,6 +235,7 @@ Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat form
   }
   Result<ReadShape> read = ReadModelBytes(bytes, format, path, name, context);
   if (!read.ok()) return read.status();
+  auto start = std::chrono::steady_clock::now();
   CanonicalModel canonical;
   const PayloadKind kind = PayloadKindOf(*read);
   canonical.kind = kind;
@@ -253,6 +257,8 @@ Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat form
   }
   reread->length_unit = read->length_unit;
   reread->unit_scale_mm = read->unit_scale_mm;
+  reread->stages = std::move(read->stages);
+  reread->stages.emplace_back("canonical", StageSeconds(start));
   canonical.payload = std::move(*payload);
   Result<std::shared_ptr<const Model>> model =
       BuildModel(std::move(*reread), format, name, display_name);

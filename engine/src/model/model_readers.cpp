@@ -331,6 +331,7 @@ Status ParseStep(const std::string& bytes, const std::string& name, XSControl_Re
 
 Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
                            const Context* context) {
+  auto start = std::chrono::steady_clock::now();
   STEPCAFControl_Reader reader;
   reader.SetColorMode(true);
   reader.SetNameMode(true);
@@ -340,6 +341,8 @@ Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
   if (reader.NbRootsForTransfer() == 0) return ParseError(name, "the STEP file holds no shapes");
 
   ReadShape read;
+  read.stages.emplace_back("occt_parse", StageSeconds(start));
+  start = std::chrono::steady_clock::now();
   TColStd_SequenceOfAsciiString lengths, angles, solid_angles;
   reader.ChangeReader().FileUnits(lengths, angles, solid_angles);
   SetUnit(&read, lengths.IsEmpty() ? "MILLIMETRE" : lengths.First().ToCString());
@@ -351,6 +354,7 @@ Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
     return ParseError(name, "the STEP translator could not transfer the shapes");
   }
   read.shape = FreeShapesCompound(read.doc);
+  read.stages.emplace_back("occt_transfer", StageSeconds(start));
   return read;
 }
 

@@ -4,7 +4,10 @@
 #include <Standard_Handle.hxx>
 #include <TDocStd_Document.hxx>
 #include <TopoDS_Shape.hxx>
+#include <chrono>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace rdmesh {
 
@@ -15,7 +18,12 @@ struct ReadShape {
   Handle(TDocStd_Document) doc;
   std::string length_unit;
   double unit_scale_mm = 1.0;
+  /// Where the load's time went so far, in order (stage name, seconds): ModelInfo::load_stages.
+  std::vector<std::pair<std::string, double>> stages;
 };
+
+/// Seconds from `start` to now, on the steady clock (for ReadShape::stages).
+double StageSeconds(std::chrono::steady_clock::time_point start);
 
 /// The document's free shapes (with their locations) as one compound: the model's shape.
 TopoDS_Shape FreeShapesCompound(const Handle(TDocStd_Document) & doc);
