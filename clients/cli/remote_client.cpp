@@ -11,10 +11,10 @@
 #include <thread>
 #include <utility>
 
-#include "convert.h"
 #include "rdmesh/sha256.h"
 #include "rdmesh/v1/rdmesh.grpc.pb.h"
-#include "status_map.h"
+#include "wire/convert.h"
+#include "wire/status_map.h"
 
 namespace rdmesh::cli {
 namespace {

@@ -20,7 +20,7 @@ namespace rdmesh::cli {
 ///
 /// The context's progress callback receives the server's progress. Cancel() or the context's
 /// deadline cancel the call (kCancelled / kDeadlineExceeded). Server errors come back with the
-/// engine code they stand for (server/status_map). Credentials come from the environment:
+/// engine code they stand for (server/wire/status_map). Credentials come from the environment:
 /// RDMESH_TOKEN (or RDMESH_TOKEN_FILE) for a bearer token, RDMESH_TLS_CA (a PEM file) for TLS.
 /// Every call carries the header `x-rdmesh-model: <sha256 of the file>`, on which a balancer in
 /// front of several rdmeshd replicas routes (docs/ROUTING.md).

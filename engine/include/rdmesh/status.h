@@ -6,7 +6,8 @@
 
 namespace rdmesh {
 
-/// Error categories of the engine. The server maps each to one gRPC code (server/status_map.cc).
+/// Error categories of the engine. The server maps each to one gRPC code
+/// (server/wire/status_map.cpp).
 enum class StatusCode {
   kOk = 0,
   kInvalidArgument,    ///< bad option values or an unusable request
