@@ -184,6 +184,7 @@ TEST(Part21Test, ReadsSeveralDataSectionsAndEditionThreeHeaders) {
   ASSERT_EQ(f.instances.size(), 2u);
   EXPECT_EQ(f.Find(2)->line, 9u);
   EXPECT_EQ(f.Arg(*f.RecordOf(*f.Find(2)), 0)->value.ref, 1u);
+  EXPECT_EQ(f.params.size(), 1u);  // DATA's own parameters are not kept
 }
 
 TEST(Part21Test, DecodesStrings) {
@@ -242,6 +243,10 @@ TEST(Part21Test, RefusesMalformedFilesWithTheLine) {
   EXPECT_EQ(ParseError(Wrap("#1=A(1.5D3);\n")),
             "line 8: a 'D' exponent is not Part 21 (reals use 'E', as in 1.5E3)");
   EXPECT_EQ(ParseError(Wrap("#1=A(1.E+999);\n")), "line 8: real number out of range");
+  File tiny = ParseOk(Wrap("#1=A(1.E-999,-1.E-999);\n"));  // too small to hold is zero
+  ASSERT_EQ(tiny.params.size(), 2u);
+  EXPECT_EQ(tiny.params[0].value.real, 0.0);
+  EXPECT_TRUE(std::signbit(tiny.params[1].value.real));
   EXPECT_EQ(ParseError(Wrap("#1=A(99999999999999999999);\n")), "line 8: integer out of range");
   EXPECT_EQ(ParseError(Wrap("#1=A(1 2);\n")),
             "line 8: expected ',' or ')' after a parameter, found '2'");

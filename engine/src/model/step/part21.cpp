@@ -450,10 +450,11 @@ bool Parser::ParseData() {
   Skip();
   if (*p_ == '(') {
     ++p_;
+    const size_t kept = f_.params.size();
     uint32_t first = 0;
     uint32_t count = 0;
     if (!ParseItems(0, &first, &count)) return false;
-    f_.params.resize(first);
+    f_.params.resize(kept);  // the section's name and schemas: not instances
   }
   if (!Expect(';', "';' after DATA")) return false;
   for (;;) {
