@@ -5,8 +5,10 @@ Usage: bench/quality/corpus_eval.py [--rdmesh build/bin/rdmesh] [--rel 1e-3] [--
 
 For each model: `rdmesh mesh MODEL -o DIR/NAME.msh --max-deviation-rel REL --json`, then
 `meshbench eval MODEL DIR/NAME.msh`. Prints one row per model with flags for what misses the bar
-(DEV: hausdorff_rel above 1.2e-3 + the model's own edge tolerance; FREE: free edges on a closed
-B-rep; INV: inverted triangles; COV: faces without triangles; RC: rdmesh exit code).
+(DEV: hausdorff_rel above 1.2 x REL + the model's own edge tolerance; FREE: free edges on a closed
+B-rep; NM: non-manifold edges on a closed B-rep, counted by the yardstick within each solid
+(on an open one the faces outside any solid count as one group, where separate shells touch);
+INV: inverted triangles; COV: faces without triangles; RC: rdmesh exit code).
 """
 import argparse
 import glob
@@ -52,10 +54,12 @@ def main():
         h = e.get("hausdorff_rel", float("inf"))
         tol = e.get("edge_tol_rel", 0.0)
         flags = []
-        if h > 1.2e-3 + tol:
+        if h > 1.2 * a.rel + tol:
             flags.append("DEV")
         if e.get("free_edges", 0) and e.get("brep_free_edges", 1) == 0:
             flags.append("FREE")
+        if e.get("nonmanifold_edges", 0) and e.get("brep_free_edges", 1) == 0:
+            flags.append("NM")
         if e.get("inverted"):
             flags.append("INV")
         if e.get("faces_covered") != e.get("faces"):
