@@ -2,11 +2,15 @@
 //   rdmesh mesh MODEL -o OUT [options] [--json] [--quiet]
 //   rdmesh info MODEL [--json]
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <iostream>
@@ -109,7 +113,12 @@ Result<std::shared_ptr<const Model>> Load(const CommonFlags& flags, Context* con
       std::cerr << "rdmesh: warning: " << outcome.problem << "\n";
   }
   run->load_seconds = SecondsSince(start);
-  if (model.ok()) run->load_stages = GetModelInfo(**model).load_stages;
+  if (model.ok()) {
+    const ModelInfo& info = GetModelInfo(**model);
+    run->load_stages = info.load_stages;
+    run->reader = info.reader;
+    run->reader_note = info.reader_note;
+  }
   return model;
 }
 
@@ -336,9 +345,29 @@ void AddCommonFlags(CLI::App* command, CommonFlags* flags) {
       ->capture_default_str();
 }
 
+#ifdef RDMESH_REMOTE_EXEC
+// `--remote` runs in rdmesh-remote, the same command with the gRPC client, from this binary's
+// folder: this one links no gRPC, so that a local run starts fast. Returns only when it cannot
+// start it (kExitUsage, with the reason on stderr).
+int ExecRemote(char** argv) {
+  std::error_code error;
+  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  const std::string remote = (self.parent_path() / "rdmesh-remote").string();
+  if (!error) ::execv(remote.c_str(), argv);
+  std::cerr << "rdmesh: --remote needs " << remote << " (" << std::strerror(errno) << ")\n";
+  return kExitUsage;
+}
+#endif
+
 }  // namespace
 
 int Main(int argc, char** argv) {
+#ifdef RDMESH_REMOTE_EXEC
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--remote" || arg.rfind("--remote=", 0) == 0) return ExecRemote(argv);
+  }
+#endif
   CLI::App app{
       "rdmesh: watertight surface meshes of CAD models (STEP, IGES, BREP).\n"
       "Exit codes: 0 ok, 1 meshing failed (or --strict and a face failed), 2 bad "
@@ -362,7 +391,7 @@ int Main(int argc, char** argv) {
   mesh->add_option("-o,--output", output, "Output file; the extension picks the format:" + formats)
       ->required();
   mesh->add_flag("--strict", strict, "Exit with code 1 when any face fails to mesh");
-#ifdef RDMESH_WITH_REMOTE
+#if defined(RDMESH_WITH_REMOTE) || defined(RDMESH_REMOTE_EXEC)
   mesh->add_option("--remote", remote,
                    "Mesh on the rdmeshd server at HOST:PORT (same options, same output; see "
                    "docs/SERVICE.md)");

@@ -48,6 +48,8 @@ nlohmann::ordered_json ModelInfoJson(const ModelInfo& info) {
       {"surface_types", info.surface_types},
       {"part_names", info.part_names},
       {"closed", info.closed},
+      {"reader", info.reader},
+      {"reader_note", info.reader_note},
   };
 }
 
@@ -91,6 +93,8 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
       {"face_seconds", s.face_seconds},
       {"load_seconds", run.load_seconds},
       {"load_stages", LoadStagesJson(run)},
+      {"reader", run.reader},
+      {"reader_note", run.reader_note},
       {"write_seconds", run.write_seconds},
       {"mesh_cpu_seconds", run.mesh_cpu_seconds},
       {"requested_deviation", s.requested_deviation},

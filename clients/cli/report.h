@@ -18,6 +18,8 @@ struct RunInfo {
   double load_seconds = 0.0;  ///< reading the model file
   /// The load's stages (ModelInfo::load_stages), reported as --json's load_stages.
   std::vector<std::pair<std::string, double>> load_stages;
+  std::string reader;          ///< ModelInfo::reader: "rdmesh", "occt" or ""
+  std::string reader_note;     ///< ModelInfo::reader_note
   double write_seconds = 0.0;  ///< writing the output file
   /// CPU time (user + system, all threads) of this process while meshing: the engine's time
   /// without the waits a loaded machine adds to the wall-clock `seconds`. For --lod, all levels.

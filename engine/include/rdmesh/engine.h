@@ -15,7 +15,7 @@
 
 namespace rdmesh {
 
-class Model;  // opaque: the loaded B-rep (engine/src/model.h)
+class Model;  // opaque: the loaded B-rep (engine/src/model/model.h)
 
 /// Loads a model from a file; the format follows the extension (.step/.stp, .iges/.igs, .brep).
 /// kNotFound, kParseError (with the file name and the reason) or kEmptyModel on failure.

@@ -32,6 +32,10 @@ struct ModelInfo {
   /// occt_parse, occt_transfer), canonical (the round trip through the stored form), model (ids,
   /// areas, box). A model read from the store has only its own stages.
   std::vector<std::pair<std::string, double>> load_stages;
+  /// The STEP reader that built the model: "rdmesh" (its own) or "occt" (OCCT's, for files the
+  /// own reader does not cover; reader_note says why). "" for other formats and stored models.
+  std::string reader;
+  std::string reader_note;
 };
 
 /// Model file formats.

@@ -215,6 +215,8 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
   model->info.length_unit = read.length_unit;
   model->info.unit_scale_mm = read.unit_scale_mm;
   model->info.load_stages = std::move(read.stages);
+  model->info.reader = read.reader;
+  model->info.reader_note = read.reader_note;
   model->info.load_stages.emplace_back("model", StageSeconds(start));
   return std::shared_ptr<const Model>(std::move(model));
 }
@@ -258,6 +260,8 @@ Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat form
   reread->length_unit = read->length_unit;
   reread->unit_scale_mm = read->unit_scale_mm;
   reread->stages = std::move(read->stages);
+  reread->reader = read->reader;
+  reread->reader_note = read->reader_note;
   reread->stages.emplace_back("canonical", StageSeconds(start));
   canonical.payload = std::move(*payload);
   Result<std::shared_ptr<const Model>> model =

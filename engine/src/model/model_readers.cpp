@@ -43,6 +43,7 @@
 #include <iostream>
 #include <istream>
 #include <mutex>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <streambuf>
@@ -355,6 +356,7 @@ Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
   }
   read.shape = FreeShapesCompound(read.doc);
   read.stages.emplace_back("occt_transfer", StageSeconds(start));
+  read.reader = "occt";
   return read;
 }
 

@@ -20,6 +20,10 @@ struct ReadShape {
   double unit_scale_mm = 1.0;
   /// Where the load's time went so far, in order (stage name, seconds): ModelInfo::load_stages.
   std::vector<std::pair<std::string, double>> stages;
+  /// Which reader built it: "rdmesh" (model/step), "occt", or "" (BREP, IGES, a stored payload).
+  std::string reader;
+  /// Why rdmesh's own STEP reader passed the file to OCCT's ("" when it did not).
+  std::string reader_note;
 };
 
 /// Seconds from `start` to now, on the steady clock (for ReadShape::stages).
