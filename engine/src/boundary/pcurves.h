@@ -6,8 +6,7 @@
 // model.cpp), BRepTools::UVBounds asks for every edge's pcurve of the face, and
 // BRepTools_WireExplorer maps the wire's vertices; the edge grids, healing and each
 // face's domain asked all this several times per face and edge, and with two threads the
-// reference counts of the locations those lookups copy were shared by both (bench/RESULTS.md,
-// "Pcurves looked up once").
+// reference counts of the locations those lookups copy were shared by both.
 
 #include <Geom2d_Curve.hxx>
 #include <Standard_Handle.hxx>

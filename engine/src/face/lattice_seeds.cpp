@@ -12,18 +12,12 @@ namespace rdmesh {
 
 namespace {
 
-// The ring lattice of a partial sphere stands at this fraction of the deviation. While tuning
-// (boundary clearance 0.5), unit sphere triangles over the interpolating minimum at 3e-3 / 1e-3 /
-// 3e-4 / 1e-4 of the diagonal: fill 0.85 1.20 / 1.17 / 1.19 / 1.18, 0.875 1.19 / 1.19 / 1.17 /
-// 1.17, 0.9 1.26 / 1.20 / 1.20 / 1.16; 0.85 was the fastest of the three (bench/RESULTS.md,
-// "Spheres start from a lattice").
+// The ring lattice of a partial sphere stands at this fraction of the deviation (the fastest
+// of the fills that came within 1.2x the interpolating minimum; docs/TUNING.md).
 constexpr double kRingFill = 0.85;
 
-// The geodesic lattice of a closed sphere is the coarsest whose equal triangles stand within
-// this fraction of the deviation. Unit sphere triangles over the minimum at 3e-3 / 1e-3 / 3e-4 /
-// 1e-4 / 3e-5: 0.93 1.12 / 1.09 / 1.10 / 1.09 / -, 0.94 1.12 / 1.09 / 1.10 / 1.09 / 1.08, 0.95
-// 1.12 / 1.09 / 1.09 / 1.08 / 1.08, 0.96 1.12 / 1.18 / 1.07 / 1.09 / 1.13, 0.97 1.12 / 1.18 /
-// 1.18 / 1.15 / - (bench/RESULTS.md, "A closed sphere starts from a geodesic lattice").
+// A closed sphere's geodesic lattice stands at this fraction of the deviation (the fill nearest
+// the interpolating minimum from 3e-3 to 3e-5; docs/TUNING.md).
 constexpr double kGeodesicFill = 0.95;
 
 // Rounds of the spring relaxation of the geodesic lattice, its step (stable below 1/3 with six
