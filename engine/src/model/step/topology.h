@@ -1,0 +1,60 @@
+#pragma once
+// STEP topology (ISO 10303-42 B-reps) to TopoDS shapes, built as OCCT 7.6's StepToTopoDS builds
+// them (Builder, TranslateShell/Face/EdgeLoop/Edge/Vertex): one TopoDS vertex per VERTEX_POINT and
+// one edge per EDGE_CURVE within a representation item, the same vertex merging, the same edge
+// parameters (projections of the vertices on the curve), the file's pcurves where OCCT takes
+// them, the same wire and face orientations. Then each item is healed with the ShapeFix calls
+// and settings of OCCT's reader (XSAlgo_AlgoContainer::ProcessShape without a resource file).
+#include <TopTools_DataMapOfShapeShape.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Shape.hxx>
+#include <TopoDS_Wire.hxx>
+#include <cstdint>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "model/step/geometry.h"
+
+namespace rdmesh::step {
+
+/// The representation items that make B-reps: MANIFOLD_SOLID_BREP, BREP_WITH_VOIDS,
+/// SHELL_BASED_SURFACE_MODEL.
+bool IsBrepItem(const Entities& entities, const Instance& instance);
+
+/// One B-rep representation item, built and then healed.
+struct BrepItem {
+  uint64_t id = 0;
+  UnitFactors units;
+  TopoDS_Shape raw;     ///< as StepToTopoDS_Builder leaves it
+  TopoDS_Shape healed;  ///< after ShapeFix, what OCCT's reader binds to the item
+  /// The faces and shells as built (id, raw shape), for the styled items that point at them;
+  /// HealedShape maps them to what the healing made of them.
+  std::vector<std::pair<uint64_t, TopoDS_Shape>> bound;
+  /// What the healing replaced each sub-shape of `raw` with (down to edges), as OCCT's
+  /// ShapeProcess_ShapeContext records it; empty when the healing changed nothing.
+  TopTools_DataMapOfShapeShape modified;
+  /// Curve entities whose Geom curve this item's edges use (shared with other items through
+  /// Geometry::SharedCurve): items sharing one are healed one after the other.
+  std::vector<uint64_t> curves;
+};
+
+/// Builds the raw shape of `item.id` (StepToTopoDS_Builder::Init). Throws Unsupported where
+/// OCCT's reader would drop a face, an edge or a wire, or builds something not reproduced here.
+void BuildItem(Geometry& geometry, BrepItem* item);
+
+/// Heals `item.raw` into `item.healed` as XSAlgo_AlgoContainer::ProcessShape does by default:
+/// ShapeFix_Shape with the item's precision and maximum tolerance, same-parameter fixing off in
+/// the wire tool, no open solids. Thread-safe for items that share no TShapes or Geom objects.
+void HealItem(BrepItem* item);
+
+/// Initialises, once per process, the OCCT globals BuildItem and HealItem use (the shape
+/// healing algorithm containers, lazily built planes), so HealItem may run in parallel.
+void PrepareOcct();
+
+/// The shape OCCT's reader binds to a face, shell or item after healing (MergeTransferInfo):
+/// what the healing replaced `raw` with, `raw` when untouched, null when removed.
+TopoDS_Shape HealedShape(const BrepItem& item, const TopoDS_Shape& raw);
+
+}  // namespace rdmesh::step
