@@ -71,11 +71,11 @@ struct Instance {
 /// A parsed file. Owns a copy of the bytes it points into (`text`).
 class File {
  public:
-  std::string text;                  ///< the file's bytes
+  std::string text;  ///< the file's bytes
   /// FILE_SCHEMA names, decoded and cut before any object identifier: "AUTOMOTIVE_DESIGN" for
   /// 'AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'.
   std::vector<std::string> schemas;
-  std::vector<Instance> instances;   ///< in ascending id order (sorted after the parse)
+  std::vector<Instance> instances;  ///< in ascending id order (sorted after the parse)
   std::vector<Record> records;
   std::vector<Param> params;
 
