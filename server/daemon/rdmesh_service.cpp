@@ -19,14 +19,29 @@ namespace pb = ::rdmesh::v1;
 namespace wire = ::rdmesh::internal;
 using Clock = std::chrono::steady_clock;
 
+/// Whether the client set a deadline (gRPC reports "none" as a time in the far future).
+bool HasDeadline(const grpc::ServerContext& context) {
+  return context.deadline() <
+         std::chrono::system_clock::time_point::max() - std::chrono::hours(24 * 365);
+}
+
 /// The call's deadline on the steady clock; none when the client set none.
 std::optional<Clock::time_point> DeadlineOf(const grpc::ServerContext& context) {
-  const auto deadline = context.deadline();
-  if (deadline >= std::chrono::system_clock::time_point::max() - std::chrono::hours(24 * 365)) {
-    return std::nullopt;
+  if (!HasDeadline(context)) return std::nullopt;
+  return Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                            context.deadline() - std::chrono::system_clock::now());
+}
+
+/// A Mesh call's deadline: the client's, or `timeout_seconds` after `start` when that is earlier.
+std::optional<Clock::time_point> MeshDeadline(const grpc::ServerContext& context,
+                                              Clock::time_point start, double timeout_seconds) {
+  std::optional<Clock::time_point> deadline = DeadlineOf(context);
+  if (timeout_seconds > 0) {
+    const Clock::time_point timeout = start + std::chrono::duration_cast<Clock::duration>(
+                                                  std::chrono::duration<double>(timeout_seconds));
+    if (!deadline || timeout < *deadline) deadline = timeout;
   }
-  return Clock::now() +
-         std::chrono::duration_cast<Clock::duration>(deadline - std::chrono::system_clock::now());
+  return deadline;
 }
 
 void FillModelFile(const StoredModel& model, wire::ModelFile* out) {
@@ -67,6 +82,41 @@ grpc::Status Finish(const RequestLog& log, const grpc::Status& status, Clock::ti
              static_cast<int>(status.error_code()), status.error_message());
   }
   return status;
+}
+
+/// Counts a Mesh call as completed when it leaves scope, however it ends after admission.
+class CountOnExit {
+ public:
+  explicit CountOnExit(std::atomic<int64_t>* counter) : counter_(counter) {}
+  ~CountOnExit() { counter_->fetch_add(1); }
+  CountOnExit(const CountOnExit&) = delete;
+  CountOnExit& operator=(const CountOnExit&) = delete;
+
+ private:
+  std::atomic<int64_t>* counter_;
+};
+
+/// The worker's Mesh call: the model, the options, what to return, the server's triangle limit,
+/// the levels, the client's deadline and the time the call has taken so far.
+wire::ToWorker MeshCall(const MeshOptions& options, const std::vector<double>& levels,
+                        const StoredModel& model, const pb::MeshRequest& request,
+                        const grpc::ServerContext& context, int64_t max_triangles,
+                        Clock::time_point start, const std::string& request_id) {
+  wire::ToWorker call;
+  call.set_request_id(request_id);
+  wire::MeshCall* mesh = call.mutable_mesh();
+  FillModelFile(model, mesh->mutable_model());
+  *mesh->mutable_options() = ToProto(options);
+  *mesh->mutable_return_fields() = request.return_fields();
+  mesh->set_max_triangles(max_triangles);
+  for (double level : levels) mesh->add_lod_deviation_rel(level);
+  if (HasDeadline(context)) {
+    mesh->set_deadline_unix_ms(
+        std::chrono::duration_cast<std::chrono::milliseconds>(context.deadline().time_since_epoch())
+            .count());
+  }
+  mesh->set_elapsed_seconds(SecondsSince(start));
+  return call;
 }
 
 }  // namespace
@@ -129,12 +179,7 @@ Result<std::shared_ptr<const StoredModel>> RdmeshService::Accept(
         },
         [context] { return context->IsCancelled(); }, DeadlineOf(*context), log);
     active_parses_.fetch_sub(1);
-    if (end.worker_ok) {
-      worker->Remember(spooled.id);
-      pool_.Release(std::move(worker));
-    } else {
-      pool_.Discard(std::move(worker));
-    }
+    ReturnWorker(std::move(worker), end, spooled.id);
     *refuse = end.crashed && end.phase == "load" && end.status.code() == StatusCode::kParseError;
     if (!end.status.ok()) return end.status;
     if (!info) return Status(StatusCode::kInternal, "the worker described no model");
@@ -273,6 +318,94 @@ grpc::Status RdmeshService::GetModelInfo(grpc::ServerContext* context, const pb:
   return Finish(log, grpc::Status::OK, start);
 }
 
+void RdmeshService::ReturnWorker(std::unique_ptr<WorkerProcess> worker, const CallEnd& end,
+                                 const std::string& model_id) {
+  if (end.worker_ok) {
+    worker->Remember(model_id);
+    pool_.Release(std::move(worker));
+  } else {
+    pool_.Discard(std::move(worker));
+  }
+}
+
+Result<RdmeshService::MeshPlan> RdmeshService::PlanMesh(const pb::MeshRequest& request) const {
+  Result<MeshOptions> options = FromProto(request.options());
+  if (!options.ok()) return options.status();
+  if (Status valid = ValidateOptions(*options); !valid.ok()) return valid;
+  MeshPlan plan;
+  if (request.lod_deviation_rel_size() > 0) {
+    if (request.options().has_max_deviation_rel()) {
+      return Status(StatusCode::kInvalidArgument,
+                    "lod_deviation_rel replaces max_deviation_rel: leave max_deviation_rel unset");
+    }
+    Result<std::vector<double>> levels = ResolveLevels(
+        {request.lod_deviation_rel().begin(), request.lod_deviation_rel().end()}, *options);
+    if (!levels.ok()) return levels.status();
+    plan.levels = std::move(*levels);
+  }
+  if (config_.max_triangles > 0 && options->max_triangles > config_.max_triangles) {
+    return Status(StatusCode::kInvalidArgument, "max_triangles " +
+                                                    std::to_string(options->max_triangles) +
+                                                    " is more than the server's limit of " +
+                                                    std::to_string(config_.max_triangles));
+  }
+  options->threads =
+      options->threads > 0 ? std::min(options->threads, resolved_threads_) : resolved_threads_;
+  plan.options = std::move(*options);
+  return plan;
+}
+
+grpc::Status RdmeshService::Admit(const std::function<bool()>& cancelled) {
+  switch (limiter_.Acquire(cancelled)) {
+    case JobLimiter::Admission::kAdmitted:
+      return grpc::Status::OK;
+    case JobLimiter::Admission::kQueueFull:
+      return ToGrpcStatus(Status(StatusCode::kResourceExhausted,
+                                 "the job queue is full (" + std::to_string(limiter_.max_jobs()) +
+                                     " running, " + std::to_string(limiter_.max_queue()) +
+                                     " waiting); retry later"));
+    case JobLimiter::Admission::kStopped:
+      return ToGrpcStatus(Status(StatusCode::kCancelled, "cancelled while queued"));
+    case JobLimiter::Admission::kClosed:
+      break;
+  }
+  return Unavailable("the server is shutting down");
+}
+
+pb::MeshEvent RdmeshService::StartedEvent(const MeshPlan& plan, const StoredModel& model,
+                                          const pb::ModelInfo& loaded, double queue_seconds,
+                                          pid_t worker, const RequestLog& log) const {
+  const MeshOptions& options = plan.options;
+  pb::MeshEvent event;
+  pb::Started* started = event.mutable_started();
+  started->set_job_id(log.id());
+  *started->mutable_model() = Describe(model, true);
+  started->mutable_model()->set_cached(loaded.cached());
+  started->mutable_model()->set_load_seconds(loaded.load_seconds());
+  started->mutable_model()->set_from_store(loaded.from_store());
+  // With levels of detail, the options of the finest level.
+  const MeshOptions shown =
+      plan.levels.empty() ? options : LevelOptions(options, plan.levels.back());
+  pb::ResolvedOptions* resolved = started->mutable_options();
+  *resolved->mutable_options() = ToProto(shown);
+  resolved->set_max_deviation_abs(shown.max_deviation > 0
+                                      ? shown.max_deviation
+                                      : shown.max_deviation_rel * model.info.diagonal());
+  resolved->set_threads(options.threads);
+  resolved->set_server_max_triangles(config_.max_triangles);
+  started->set_faces_requested(
+      options.face_ids.empty() ? model.info.faces() : static_cast<int>(options.face_ids.size()));
+  started->set_queue_seconds(queue_seconds);
+  log.Info(
+      "meshing {} faces on {} threads in worker {}{}: max_deviation {} (abs {}), rd {}, "
+      "budget {}, levels {}",
+      started->faces_requested(), options.threads, worker,
+      loaded.cached() ? "" : " (parsed the model)", shown.max_deviation,
+      resolved->max_deviation_abs(), options.rd_tolerance, options.max_triangles,
+      plan.levels.size());
+  return event;
+}
+
 grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshRequest* request,
                                  grpc::ServerWriter<pb::MeshEvent>* writer) {
   const Clock::time_point start = Clock::now();
@@ -282,43 +415,16 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
     return Finish(log, Unavailable("the server is shutting down"), start);
   }
 
-  Result<MeshOptions> options = FromProto(request->options());
-  if (!options.ok()) return Finish(log, ToGrpcStatus(options.status()), start);
-  if (Status valid = ValidateOptions(*options); !valid.ok()) {
-    return Finish(log, ToGrpcStatus(valid), start);
-  }
-  std::vector<double> levels;  // levels of detail, coarsest first; empty = one mesh
-  if (request->lod_deviation_rel_size() > 0) {
-    if (request->options().has_max_deviation_rel()) {
-      return Finish(log,
-                    ToGrpcStatus(Status(StatusCode::kInvalidArgument,
-                                        "lod_deviation_rel replaces max_deviation_rel: leave "
-                                        "max_deviation_rel unset")),
-                    start);
-    }
-    Result<std::vector<double>> resolved = ResolveLevels(
-        {request->lod_deviation_rel().begin(), request->lod_deviation_rel().end()}, *options);
-    if (!resolved.ok()) return Finish(log, ToGrpcStatus(resolved.status()), start);
-    levels = std::move(*resolved);
-  }
-  if (config_.max_triangles > 0 && options->max_triangles > config_.max_triangles) {
-    return Finish(log,
-                  ToGrpcStatus(Status(StatusCode::kInvalidArgument,
-                                      "max_triangles " + std::to_string(options->max_triangles) +
-                                          " is more than the server's limit of " +
-                                          std::to_string(config_.max_triangles))),
-                  start);
-  }
-  options->threads =
-      options->threads > 0 ? std::min(options->threads, resolved_threads_) : resolved_threads_;
-
+  // 1. Validate: the options and levels, then the model (parsed on a worker unless indexed).
+  Result<MeshPlan> plan = PlanMesh(*request);
+  if (!plan.ok()) return Finish(log, ToGrpcStatus(plan.status()), start);
   bool cached = false;
   Result<std::shared_ptr<const StoredModel>> entry =
       Resolve(context, request->model(), log, &cached);
   if (!entry.ok()) return Finish(log, ToGrpcStatus(entry.status()), start);
   const StoredModel& model = **entry;
   const int faces = model.info.faces();
-  for (int id : options->face_ids) {
+  for (int id : plan->options.face_ids) {
     if (id > faces) {
       return Finish(
           log,
@@ -329,58 +435,24 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
     }
   }
 
+  // 2. Admit: a job slot, then a worker (one that holds the model, when one is idle).
   const Clock::time_point queued = Clock::now();
   const auto cancelled = [context] { return context->IsCancelled(); };
-  switch (limiter_.Acquire(cancelled)) {
-    case JobLimiter::Admission::kAdmitted:
-      break;
-    case JobLimiter::Admission::kQueueFull:
-      return Finish(
-          log,
-          ToGrpcStatus(Status(StatusCode::kResourceExhausted,
-                              "the job queue is full (" + std::to_string(limiter_.max_jobs()) +
-                                  " running, " + std::to_string(limiter_.max_queue()) +
-                                  " waiting); retry later")),
-          start);
-    case JobLimiter::Admission::kStopped:
-      return Finish(log, ToGrpcStatus(Status(StatusCode::kCancelled, "cancelled while queued")),
-                    start);
-    case JobLimiter::Admission::kClosed:
-      return Finish(log, Unavailable("the server is shutting down"), start);
+  if (grpc::Status admitted = Admit(cancelled); !admitted.ok()) {
+    return Finish(log, admitted, start);
   }
   JobSlot slot(&limiter_);
-  struct CountCompleted {
-    std::atomic<int64_t>* counter;
-    ~CountCompleted() { counter->fetch_add(1); }
-  } count_completed{&jobs_completed_};
-
+  CountOnExit count_completed(&jobs_completed_);
   Status error = Status::Ok();
   std::unique_ptr<WorkerProcess> worker = pool_.Acquire(model.id, cancelled, &error);
   if (!worker) return Finish(log, ToGrpcStatus(error), start);
   const double queue_seconds = SecondsSince(queued);
 
-  wire::ToWorker call;
-  call.set_request_id(log.id());
-  wire::MeshCall* mesh = call.mutable_mesh();
-  FillModelFile(model, mesh->mutable_model());
-  *mesh->mutable_options() = ToProto(*options);
-  *mesh->mutable_return_fields() = request->return_fields();
-  mesh->set_max_triangles(config_.max_triangles);
-  for (double level : levels) mesh->add_lod_deviation_rel(level);
-  if (const auto deadline = context->deadline();
-      deadline < std::chrono::system_clock::time_point::max() - std::chrono::hours(24 * 365)) {
-    mesh->set_deadline_unix_ms(
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline.time_since_epoch()).count());
-  }
-  mesh->set_elapsed_seconds(SecondsSince(start));
-  std::optional<Clock::time_point> deadline = DeadlineOf(*context);
-  if (options->timeout_seconds > 0) {
-    const Clock::time_point timeout =
-        start + std::chrono::duration_cast<Clock::duration>(
-                    std::chrono::duration<double>(options->timeout_seconds));
-    if (!deadline || timeout < *deadline) deadline = timeout;
-  }
+  // 3. Build the worker call.
+  const wire::ToWorker call = MeshCall(plan->options, plan->levels, model, *request, *context,
+                                       config_.max_triangles, start, log.id());
 
+  // 4. Relay the worker's events to the client: its Ready as the Started event, then the rest.
   int64_t face_messages = 0;
   std::optional<pb::Summary> summary;
   active_jobs_.fetch_add(1);
@@ -388,48 +460,17 @@ grpc::Status RdmeshService::Mesh(grpc::ServerContext* context, const pb::MeshReq
       worker.get(), pool_.settings(), call, ReaderName(model.format),
       [&](const wire::FromWorker& reply) {
         if (reply.has_ready()) {
-          pb::MeshEvent started_event;
-          pb::Started* started = started_event.mutable_started();
-          started->set_job_id(log.id());
-          *started->mutable_model() = Describe(model, true);
-          started->mutable_model()->set_cached(reply.ready().model().cached());
-          started->mutable_model()->set_load_seconds(reply.ready().model().load_seconds());
-          started->mutable_model()->set_from_store(reply.ready().model().from_store());
-          // With levels of detail, the options of the finest level.
-          const MeshOptions shown =
-              levels.empty() ? *options : LevelOptions(*options, levels.back());
-          pb::ResolvedOptions* resolved = started->mutable_options();
-          *resolved->mutable_options() = ToProto(shown);
-          resolved->set_max_deviation_abs(shown.max_deviation > 0
-                                              ? shown.max_deviation
-                                              : shown.max_deviation_rel * model.info.diagonal());
-          resolved->set_threads(options->threads);
-          resolved->set_server_max_triangles(config_.max_triangles);
-          started->set_faces_requested(
-              options->face_ids.empty() ? faces : static_cast<int>(options->face_ids.size()));
-          started->set_queue_seconds(queue_seconds);
-          log.Info(
-              "meshing {} faces on {} threads in worker {}{}: max_deviation {} (abs {}), rd {}, "
-              "budget {}, levels {}",
-              started->faces_requested(), options->threads, worker->pid(),
-              reply.ready().model().cached() ? "" : " (parsed the model)", shown.max_deviation,
-              resolved->max_deviation_abs(), options->rd_tolerance, options->max_triangles,
-              levels.size());
-          return writer->Write(started_event);
+          return writer->Write(
+              StartedEvent(*plan, model, reply.ready().model(), queue_seconds, worker->pid(), log));
         }
         if (!reply.has_event()) return true;
         if (reply.event().has_face()) ++face_messages;
         if (reply.event().has_summary()) summary = reply.event().summary();
         return writer->Write(reply.event());
       },
-      cancelled, deadline, log);
+      cancelled, MeshDeadline(*context, start, plan->options.timeout_seconds), log);
   active_jobs_.fetch_sub(1);
-  if (end.worker_ok) {
-    worker->Remember(model.id);
-    pool_.Release(std::move(worker));
-  } else {
-    pool_.Discard(std::move(worker));
-  }
+  ReturnWorker(std::move(worker), end, model.id);
   if (end.status.ok() && summary) {
     log.Info("{} triangles, {} nodes, {} faces ok, {} failed; deviation {:.4g}; {} face messages",
              summary->triangles(), summary->nodes(), summary->faces_ok(), summary->faces_failed(),

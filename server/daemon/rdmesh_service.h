@@ -5,12 +5,15 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "common/log.h"
 #include "daemon/job_limiter.h"
 #include "daemon/model_index.h"
+#include "rdmesh/options.h"
 #include "rdmesh/v1/rdmesh.grpc.pb.h"
 #include "worker/call_worker.h"
 #include "worker/worker_pool.h"
@@ -81,6 +84,27 @@ class RdmeshService final : public ::rdmesh::v1::Rdmesh::Service {
                                                     const std::string& bytes,
                                                     const std::string& name, ModelFormat format,
                                                     const RequestLog& log, bool* cached);
+  /// A worker whose call has ended: back to the pool, holding `model_id`, when it is fine;
+  /// discarded (and replaced) when it died or was killed.
+  void ReturnWorker(std::unique_ptr<WorkerProcess> worker, const CallEnd& end,
+                    const std::string& model_id);
+
+  /// What a Mesh request asks for, checked.
+  struct MeshPlan {
+    MeshOptions options;         ///< validated; threads resolved against the server's
+    std::vector<double> levels;  ///< levels of detail, coarsest first; empty = one mesh
+  };
+  /// Mesh, validate: the request's options and levels of detail, by the engine's rules and
+  /// the server's limits.
+  Result<MeshPlan> PlanMesh(const ::rdmesh::v1::MeshRequest& request) const;
+  /// Mesh, admit: OK once the call holds a job slot (the caller then owns it); otherwise the
+  /// queue is full, the call was cancelled while queued, or the server is shutting down.
+  grpc::Status Admit(const std::function<bool()>& cancelled);
+  /// Mesh, relay: the Started event the worker's Ready becomes. `loaded` is the worker's
+  /// description of its load (cached, load_seconds, from_store). Logs what is meshed.
+  ::rdmesh::v1::MeshEvent StartedEvent(const MeshPlan& plan, const StoredModel& model,
+                                       const ::rdmesh::v1::ModelInfo& loaded, double queue_seconds,
+                                       pid_t worker, const RequestLog& log) const;
 
   const ServiceConfig config_;
   const int resolved_threads_;
