@@ -29,8 +29,9 @@ struct ModelInfo {
   std::vector<std::string> part_names;       ///< names of the parts (XCAF labels)
   bool closed = false;                       ///< every edge bounds exactly two faces (seams aside)
   /// Where the load's time went, in order (stage, seconds): the reader's stages (e.g.
-  /// occt_parse, occt_transfer), canonical (the round trip through the stored form), model (ids,
-  /// areas, box). A model read from the store has only its own stages.
+  /// occt_parse, occt_transfer), canonical (the round trip through the stored form), then the
+  /// model's: topology (ids, adjacency, instances), areas, info (the tight box and the counts).
+  /// A model read from the store has only the model's stages.
   std::vector<std::pair<std::string, double>> load_stages;
   /// The STEP reader that built the model: "rdmesh" (its own) or "occt" (OCCT's, for files the
   /// own reader does not cover; reader_note says why). "" for other formats and stored models.

@@ -193,15 +193,20 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
                     "cannot read '" + name + "': " + std::to_string(derived->face_area.size()) +
                         " face areas for " + std::to_string(model->face_count()) + " faces");
     }
+    read.stages.emplace_back("topology", StageSeconds(start));
+    auto step_start = std::chrono::steady_clock::now();
     if (derived != nullptr) {
       model->face_area = derived->face_area;
     } else {
       ComputeFaceAreas(model.get());
     }
+    read.stages.emplace_back("areas", StageSeconds(step_start));
+    step_start = std::chrono::steady_clock::now();
     for (int id = 1; id <= model->edge_count(); ++id)
       model->max_edge_tolerance =
           std::max(model->max_edge_tolerance, BRep_Tool::Tolerance(model->edge(id)));
     model->info = ComputeModelInfo(*model, /*bounding_box=*/derived == nullptr);
+    read.stages.emplace_back("info", StageSeconds(step_start));
     if (derived != nullptr) {
       model->info.bbox = derived->bbox;
       model->info.diagonal = derived->diagonal;
@@ -217,7 +222,6 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
   model->info.load_stages = std::move(read.stages);
   model->info.reader = read.reader;
   model->info.reader_note = read.reader_note;
-  model->info.load_stages.emplace_back("model", StageSeconds(start));
   return std::shared_ptr<const Model>(std::move(model));
 }
 
