@@ -4,6 +4,7 @@
 #include <BRepTools.hxx>
 #include <BRepTools_WireExplorer.hxx>
 #include <BRep_Tool.hxx>
+#include <Geom2d_Curve.hxx>
 #include <Geom_Surface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
@@ -13,8 +14,12 @@
 #include <TopoDS_Vertex.hxx>
 #include <TopoDS_Wire.hxx>
 #include <algorithm>
+#include <cmath>
 #include <functional>
+#include <gp_Pnt2d.hxx>
+#include <gp_Vec2d.hxx>
 #include <string>
+#include <tuple>
 
 #include "core/parallel.h"
 #include "model/model.h"
@@ -69,11 +74,130 @@ bool EdgesInOrder(const TopoDS_Wire& wire, std::vector<TopoDS_Edge>* edges) {
   return std::adjacent_find(starts.begin(), starts.end()) == starts.end();
 }
 
+// One FORWARD or REVERSED edge of a wire with its ends: its vertices in walking order, and where
+// its pcurve on the face begins and ends.
+struct WireLink {
+  TopoDS_Edge edge;
+  TopoDS_Vertex from, to;
+  gp_Pnt2d start, end;
+};
+
+// How well `next` continues a walk that has reached `end` (the (u,v) of `last`'s end, moved by
+// whole periods as the walk went). Lower is better, compared in order: a vertex of its own
+// (met within the two vertices' tolerances), the same edge back (a seam's other side), (u,v)
+// ends apart by more than `slack` after the best shift by whole periods, the periods shifted,
+// and the distance.
+struct LinkRank {
+  int own_vertex = 0, back = 0, apart = 0, periods = 0;
+  double distance = 0;
+  bool operator<(const LinkRank& o) const {
+    return std::tie(own_vertex, back, apart, periods, distance) <
+           std::tie(o.own_vertex, o.back, o.apart, o.periods, o.distance);
+  }
+};
+
+// The wire's edges chained by their ends, for a wire BRepTools_WireExplorer cannot walk. The
+// explorer follows a vertex to an edge that begins there only where the two pcurves meet within
+// twice the (u,v) resolution of the vertex tolerance, and without whole periods: it stops where a
+// surface of revolution's pcurves meet a period apart, or where a torus's seam meets its circle
+// just outside that resolution. Here each edge is followed by the edge that begins at its end
+// vertex (or one within both tolerances) whose pcurve begins nearest, after a shift by whole
+// periods (`shift` per edge: the shift JoinWalks will make), not the same edge back unless
+// nothing else begins there. A chain that comes back to its first edge's start closes a loop;
+// the wire's other edges make loops of their own. Fails for a missing pcurve, or an edge that
+// ends where no other begins (its loop is left open, for JoinWalks to name the edges).
+Status ChainByEnds(const TopoDS_Face& face, const TopoDS_Wire& wire, double period_u,
+                   double period_v, std::vector<std::vector<TopoDS_Edge>>* loops) {
+  loops->clear();
+  std::vector<WireLink> links;
+  double umin = HUGE_VAL, umax = -HUGE_VAL, vmin = HUGE_VAL, vmax = -HUGE_VAL;
+  for (TopoDS_Iterator it(wire); it.More(); it.Next()) {
+    const TopoDS_Edge& e = TopoDS::Edge(it.Value());
+    if (e.Orientation() != TopAbs_FORWARD && e.Orientation() != TopAbs_REVERSED) continue;
+    WireLink& link = links.emplace_back();
+    link.edge = e;
+    TopExp::Vertices(e, link.from, link.to, Standard_True);
+    double first = 0, last = 0;
+    const Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, first, last);
+    if (pcurve.IsNull() || link.from.IsNull() || link.to.IsNull())
+      return Status(StatusCode::kInternal,
+                    "a wire's edges do not connect end to end: an edge has no pcurve or vertex");
+    const bool reversed = e.Orientation() == TopAbs_REVERSED;
+    link.start = pcurve->Value(reversed ? last : first);
+    link.end = pcurve->Value(reversed ? first : last);
+    for (const gp_Pnt2d& p : {link.start, link.end}) {
+      umin = std::min(umin, p.X()), umax = std::max(umax, p.X());
+      vmin = std::min(vmin, p.Y()), vmax = std::max(vmax, p.Y());
+    }
+  }
+  if (links.empty()) return Status::Ok();
+  const double slack = 1e-3 * std::max(umax - umin, vmax - vmin) + 1e-9;
+  auto near = [](const TopoDS_Vertex& a, const TopoDS_Vertex& b) {
+    return a.IsSame(b) || BRep_Tool::Pnt(a).Distance(BRep_Tool::Pnt(b)) <=
+                              BRep_Tool::Tolerance(a) + BRep_Tool::Tolerance(b);
+  };
+  // The whole periods that bring `p` nearest `to` along one axis.
+  auto periods = [](double to, double p, double period) {
+    return period > 0 ? std::round((to - p) / period) : 0.0;
+  };
+  std::vector<bool> used(links.size(), false);
+  Status status;
+  for (size_t first = 0; first < links.size(); ++first) {
+    if (used[first]) continue;
+    std::vector<TopoDS_Edge>& loop = loops->emplace_back();
+    used[first] = true;
+    loop.push_back(links[first].edge);
+    size_t last = first;
+    gp_Vec2d shift(0, 0);  // of `last`'s pcurve, from the walk's shifts
+    while (true) {
+      const gp_Pnt2d end = links[last].end.Translated(shift);
+      if (links[last].to.IsSame(links[first].from) && end.Distance(links[first].start) <= slack)
+        break;  // closed, without a shift (as JoinWalks closes a loop)
+      int best = -1;
+      LinkRank best_rank;
+      gp_Vec2d best_shift;
+      for (size_t j = 0; j < links.size(); ++j) {
+        if (used[j]) continue;
+        const bool same = links[j].from.IsSame(links[last].to);
+        if (!same && !near(links[j].from, links[last].to)) continue;
+        const double ku = periods(end.X(), links[j].start.X(), period_u);
+        const double kv = periods(end.Y(), links[j].start.Y(), period_v);
+        const gp_Vec2d move(ku * period_u, kv * period_v);
+        LinkRank rank;
+        rank.own_vertex = !same;
+        rank.back = links[j].edge.IsSame(links[last].edge);
+        rank.distance = end.Distance(links[j].start.Translated(move));
+        rank.apart = rank.distance > slack;
+        rank.periods = static_cast<int>(std::fabs(ku) + std::fabs(kv));
+        if (best < 0 || rank < best_rank)
+          best = static_cast<int>(j), best_rank = rank, best_shift = move;
+      }
+      if (best < 0) {
+        if (used == std::vector<bool>(links.size(), true)) break;
+        status = Status(StatusCode::kInternal,
+                        "a wire's edges do not connect end to end: an edge ends where no other "
+                        "edge of the wire begins");
+        break;
+      }
+      used[best] = true;
+      loop.push_back(links[best].edge);
+      last = static_cast<size_t>(best);
+      shift = best_shift;
+    }
+  }
+  return status;
+}
+
 // The wire's FORWARD and REVERSED edges as BRepTools_WireExplorer walks them on `face`
 // (FORWARD), which takes the face's (u,v) bounds on a cone, B-spline or Bezier surface
-// (`bounds`). The status fails when the explorer cannot reach them all.
+// (`bounds`): one loop. Where the explorer cannot reach them all, the edges chained by their
+// ends instead (ChainByEnds: one loop or more), and the status fails when that cannot chain them
+// either.
 Status WireEdges(const TopoDS_Face& face, const TopoDS_Wire& wire,
-                 const std::function<UvBounds()>& bounds, std::vector<TopoDS_Edge>* edges) {
+                 const std::function<UvBounds()>& bounds, double period_u, double period_v,
+                 std::vector<std::vector<TopoDS_Edge>>* loops) {
+  loops->assign(1, {});
+  std::vector<TopoDS_Edge>* edges = &loops->front();
   if (EdgesInOrder(wire, edges)) return Status::Ok();
   edges->clear();
   UvBounds b;
@@ -94,9 +218,7 @@ Status WireEdges(const TopoDS_Face& face, const TopoDS_Wire& wire,
     all += it.Current().Orientation() == TopAbs_FORWARD ||
            it.Current().Orientation() == TopAbs_REVERSED;
   if (static_cast<int>(edges->size()) < all)
-    return Status(StatusCode::kInternal,
-                  "a wire's edges do not connect end to end: the wire explorer reaches " +
-                      std::to_string(edges->size()) + " of its " + std::to_string(all) + " edges");
+    return ChainByEnds(face, wire, period_u, period_v, loops);
   return Status::Ok();
 }
 
@@ -109,15 +231,19 @@ FaceLoops LoopsOf(const TopoDS_Face& face, const std::function<UvBounds()>& boun
   const Handle(Geom_Surface)& geom = BRep_Tool::Surface(face, location);
   loops.period_u = !geom.IsNull() && geom->IsUPeriodic() ? geom->UPeriod() : 0.0;
   loops.period_v = !geom.IsNull() && geom->IsVPeriodic() ? geom->VPeriod() : 0.0;
-  std::vector<TopoDS_Edge> edges;
+  std::vector<std::vector<TopoDS_Edge>> walked;
   for (TopExp_Explorer wexp(face, TopAbs_WIRE); wexp.More(); wexp.Next()) {
-    FaceWire& wire = loops.wires.emplace_back();
-    wire.reached = WireEdges(face, TopoDS::Wire(wexp.Current()), bounds, &edges);
-    for (const TopoDS_Edge& e : edges) {
-      WireEdge& w = wire.edges.emplace_back();
-      w.eid = id(e);
-      w.reversed = e.Orientation() == TopAbs_REVERSED;
-      if (w.eid != 0) w.pcurve = pcurve(w.eid, e).curve;
+    const Status reached = WireEdges(face, TopoDS::Wire(wexp.Current()), bounds, loops.period_u,
+                                     loops.period_v, &walked);
+    for (const std::vector<TopoDS_Edge>& edges : walked) {
+      FaceWire& wire = loops.wires.emplace_back();
+      wire.reached = reached;
+      for (const TopoDS_Edge& e : edges) {
+        WireEdge& w = wire.edges.emplace_back();
+        w.eid = id(e);
+        w.reversed = e.Orientation() == TopAbs_REVERSED;
+        if (w.eid != 0) w.pcurve = pcurve(w.eid, e).curve;
+      }
     }
   }
   return loops;

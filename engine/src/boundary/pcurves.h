@@ -40,8 +40,9 @@ struct WireEdge {
   Handle(Geom2d_Curve) pcurve;
 };
 
-/// A wire of a face: its FORWARD and REVERSED edges in walking order. `reached` fails when the
-/// walk could not reach them all (edges that do not connect end to end).
+/// A loop of a face: FORWARD and REVERSED edges of one of its wires in walking order (a wire the
+/// wire explorer cannot walk is chained by its edges' ends, and may make more than one loop).
+/// `reached` fails when the walk could not reach them all (edges that do not connect end to end).
 struct FaceWire {
   std::vector<WireEdge> edges;
   Status reached;
