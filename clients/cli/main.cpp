@@ -1,6 +1,7 @@
 // rdmesh: the command line front end of the engine.
 //   rdmesh mesh MODEL -o OUT [options] [--json] [--quiet]
 //   rdmesh info MODEL [--json]
+//   rdmesh batch INPUT... -o OUTDIR [options] (batch.h)
 
 #include <unistd.h>
 
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "batch.h"
 #include "exit_codes.h"
 #include "isolation.h"
 #include "mesh_flags.h"
@@ -402,12 +404,17 @@ int Main(int argc, char** argv) {
   CLI::App* info = app.add_subcommand("info", "Print what a model holds");
   AddCommonFlags(info, &info_common);
 
+  BatchFlags batch_flags;
+  CLI::App* batch = AddBatchCommand(&app, &batch_flags);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     int code = app.exit(e);
     return code == 0 ? kExitOk : kExitUsage;
   }
+  // The batch supervises a process per file itself.
+  if (batch->parsed()) return RunBatch(batch_flags);
 
   const CommonFlags& common = mesh->parsed() ? mesh_common : info_common;
   return RunIsolated(
