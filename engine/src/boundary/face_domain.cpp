@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 #include "model/model.h"
 
@@ -151,6 +152,84 @@ Status JoinWalks(const Model& model, const EdgeGrid& from_grid, const EdgeWalk& 
                     EdgeName(from.eid) + " and " + EdgeName(to->eid) + buf);
 }
 
+// The node a vertex takes where loops touch at it (or one loop passes it twice): among the
+// vertex's nodes so far (`nodes`), the one at the same (u,v), or else the nearest within `slack`
+// (pcurves that meet at the vertex only up to rounding: 3e-16 apart where a LED's hole touches
+// its outline) that is not a neighbour in its own loop (`before`, `after`: a short or degenerate
+// edge between two nodes of one vertex stays a segment); -1 for a node of its own.
+int VertexNode(const FaceDomain& d, const std::vector<int>& nodes, Vec2 uv, double slack,
+               int before, int after) {
+  for (int other : nodes)
+    if (d.uv[other].x == uv.x && d.uv[other].y == uv.y) return other;
+  int nearest = -1;
+  double best = slack;
+  for (int other : nodes) {
+    if (other == before || other == after) continue;
+    const double gap = std::hypot(d.uv[other].x - uv.x, d.uv[other].y - uv.y);
+    if (gap <= best) nearest = other, best = gap;
+  }
+  return nearest;
+}
+
+// Whether grid segment `k` of edge `a` and grid segment `l` of edge `b` lie on each other in 3D:
+// their middles within the two edges' tolerances.
+bool OnEachOther(const Model& model, const std::vector<EdgeGrid>& grids, int a, int k, int b,
+                 int l) {
+  const std::unique_ptr<Curve> ca = MakeEdgeCurve(
+                                   TopoDS::Edge(model.edge(a).Oriented(TopAbs_FORWARD))),
+                               cb = MakeEdgeCurve(
+                                   TopoDS::Edge(model.edge(b).Oriented(TopAbs_FORWARD)));
+  if (!ca || !cb) return false;
+  const std::vector<double>&ta = grids[a - 1].t, &tb = grids[b - 1].t;
+  const Vec3 ma = ca->Point(0.5 * (ta[k] + ta[k + 1])), mb = cb->Point(0.5 * (tb[l] + tb[l + 1]));
+  return Dist(ma, mb) <= BRep_Tool::Tolerance(TopoDS::Edge(model.edge(a))) +
+                             BRep_Tool::Tolerance(TopoDS::Edge(model.edge(b)));
+}
+
+// Removes pinches: two segments of different edges that join the same two nodes in opposite
+// directions and lie on each other in 3D. Where two loops touch along such a chord (a square
+// hole whose side lies on the outline's), the face has no width there, and the two segments
+// would stand for one constraint that the triangulation's nesting rule counts once, so the hole
+// beside it would be meshed. Without both, the loops join into closed loops still (each node
+// keeps as many segments in as out). Segments that only share their ends (an arc and its chord,
+// each one segment) are left to healing.
+void DropPinches(const Model& model, const std::vector<EdgeGrid>& grids, FaceDomain* d) {
+  const int ns = static_cast<int>(d->segments.size());
+  std::map<std::pair<int, int>, std::vector<int>> by_nodes;
+  for (int s = 0; s < ns; ++s) by_nodes[{d->segments[s][0], d->segments[s][1]}].push_back(s);
+  std::vector<bool> drop(ns, false);
+  for (int s = 0; s < ns; ++s) {
+    const auto [a, b] = std::pair(d->segments[s][0], d->segments[s][1]);
+    if (drop[s] || a == b || d->segment_edge[s] == 0) continue;
+    const auto twins = by_nodes.find({b, a});
+    if (twins == by_nodes.end()) continue;
+    for (int t : twins->second)
+      if (!drop[t] && d->segment_edge[t] != 0 && d->segment_edge[t] != d->segment_edge[s] &&
+          OnEachOther(model, grids, d->segment_edge[s], d->segment_grid_index[s],
+                      d->segment_edge[t], d->segment_grid_index[t])) {
+        drop[s] = drop[t] = true;
+        break;
+      }
+  }
+  if (std::find(drop.begin(), drop.end(), true) == drop.end()) return;
+  FaceDomain kept = *d;
+  kept.segments.clear(), kept.segment_splittable.clear(), kept.segment_edge.clear();
+  kept.segment_grid_index.clear(), kept.loop_begin.clear();
+  for (size_t k = 0; k < d->loop_begin.size(); ++k) {
+    const int end = k + 1 < d->loop_begin.size() ? d->loop_begin[k + 1] : ns;
+    const int begin = static_cast<int>(kept.segments.size());
+    for (int s = d->loop_begin[k]; s < end; ++s) {
+      if (drop[s]) continue;
+      kept.segments.push_back(d->segments[s]);
+      kept.segment_splittable.push_back(d->segment_splittable[s]);
+      kept.segment_edge.push_back(d->segment_edge[s]);
+      kept.segment_grid_index.push_back(d->segment_grid_index[s]);
+    }
+    if (static_cast<int>(kept.segments.size()) > begin) kept.loop_begin.push_back(begin);
+  }
+  *d = std::move(kept);
+}
+
 }  // namespace
 
 Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_id,
@@ -184,7 +263,8 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
     std::vector<int> loop;
     std::vector<int> seg_edge, seg_index;
     std::vector<bool> seg_degenerate;
-    for (const EdgeWalk& w : walks) {
+    for (int i = 0; i < m; ++i) {
+      const EdgeWalk& w = walks[i];
       const EdgeGrid& g = grids[w.eid - 1];
       const int n = static_cast<int>(g.t.size());
       for (int k = 0; k + 1 < n; ++k) {
@@ -207,10 +287,20 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
           double segment = std::min(Dist(xyz, g.xyz[idx - 1]), Dist(xyz, g.xyz[idx + 1]));
           if (miss > kPcurveMiss * segment) uv = ProjectNear(surface, uv, xyz, miss);
         }
-        int node = -1;
-        if (ref.dim == 0)  // loops that touch at a vertex share its node
-          for (int other : vertex_nodes[ref.entity])
-            if (d->uv[other].x == uv.x && d->uv[other].y == uv.y) node = other;
+        const int node_seg_index = w.reversed ? n - 2 - k : k;
+        // The loop's last node comes before its first.
+        const int before = loop.empty() ? -1 : loop.back();
+        const int after = i == m - 1 && k == n - 2 && !loop.empty() ? loop.front() : -1;
+        int node =
+            ref.dim == 0 ? VertexNode(*d, vertex_nodes[ref.entity], uv, slack, before, after) : -1;
+        if (node >= 0 && !loop.empty() && node == loop.back()) {
+          // Both ends of an edge at one (u,v): its segment of no length goes, and the node goes
+          // on with this walk's segment.
+          seg_edge.back() = w.eid;
+          seg_index.back() = node_seg_index;
+          seg_degenerate.back() = g.degenerate;
+          continue;
+        }
         if (node < 0) {
           node = static_cast<int>(d->uv.size());
           d->uv.push_back(uv);
@@ -220,9 +310,12 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
         }
         loop.push_back(node);
         seg_edge.push_back(w.eid);
-        seg_index.push_back(w.reversed ? n - 2 - k : k);
+        seg_index.push_back(node_seg_index);
         seg_degenerate.push_back(g.degenerate);
       }
+    }
+    if (loop.size() > 1 && loop.back() == loop.front()) {  // the loop closes on such an edge
+      loop.pop_back(), seg_edge.pop_back(), seg_index.pop_back(), seg_degenerate.pop_back();
     }
     if (loop.size() < 2) continue;  // a lone pole: no boundary
     d->loop_begin.push_back(static_cast<int>(d->segments.size()));
@@ -233,6 +326,7 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
       d->segment_grid_index.push_back(seg_index[k]);
     }
   }
+  DropPinches(model, grids, d);
   if (d->uv.size() < 2) return Status(StatusCode::kInternal, "the face has no boundary loop");
   d->umin = d->umax = d->uv[0].x;
   d->vmin = d->vmax = d->uv[0].y;

@@ -22,7 +22,9 @@ class Model;
 
 /// Boundary of a face in (u,v). Nodes are the boundary nodes; segments join them with the face
 /// on their left for a FORWARD face (orientation is not relied on by the triangulation). A
-/// vertex where two loops (or one loop twice) touch at the same (u,v) is one node.
+/// vertex where two loops (or one loop twice) touch at the same (u,v), up to the slack of pcurve
+/// ends that meet, is one node; two segments of different edges that lie on each other between
+/// the same two nodes in opposite directions (a pinch: the loops touch along them) are left out.
 struct FaceDomain {
   std::vector<Vec2> uv;      ///< per node: surface parameters
   std::vector<Vec3> xyz;     ///< per node: world point (shared bit-identically with neighbours)

@@ -88,6 +88,9 @@ Status ConstrainedTriangulation(const std::vector<Vec2>& points,
     }
     if (cdt.number_of_vertices() != points.size())
       return Status(StatusCode::kInternal, "the boundary loops overlap in (u,v)");
+    // Points all on one line leave no face to mark (and CGAL's faces are not set up for it).
+    if (cdt.dimension() < 2)
+      return Status(StatusCode::kInternal, "the boundary loops enclose no area in (u,v)");
     MarkDomains(cdt);
     for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
       if (!f->info().in_domain()) continue;

@@ -11,6 +11,7 @@
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
 #include <BRepPrimAPI_MakeRevol.hxx>
 #include <BRepTools.hxx>
@@ -23,6 +24,7 @@
 #include <Geom2d_Line.hxx>
 #include <GeomConvert_CompCurveToBSplineCurve.hxx>
 #include <Geom_BSplineCurve.hxx>
+#include <Geom_Line.hxx>
 #include <Geom_SphericalSurface.hxx>
 #include <TColStd_HArray1OfReal.hxx>
 #include <TColgp_HArray1OfPnt2d.hxx>
@@ -292,6 +294,152 @@ TEST(FaceDomainTest, EdgesPastTheSurfacesRangeAreMeasuredFromTheFace) {
   EXPECT_EQ(faces[0].status, FaceStatus::kOk);
   EXPECT_EQ(faces[0].reason.rfind("the B-rep prevents the requested deviation 0.03", 0), 0u)
       << faces[0].reason;
+}
+
+// A plane face in z = 0 bounded by `outer` (counter-clockwise) and `hole` (clockwise), both
+// chains of edges that share their TopoDS vertices.
+TopoDS_Face PlaneWithHole(const std::vector<TopoDS_Edge>& outer,
+                          const std::vector<TopoDS_Edge>& hole) {
+  BRepBuilderAPI_MakeWire outer_wire, hole_wire;
+  for (const TopoDS_Edge& e : outer) outer_wire.Add(e);
+  for (const TopoDS_Edge& e : hole) hole_wire.Add(e);
+  BRepBuilderAPI_MakeFace face(gp_Pln(gp::XOY()), outer_wire.Wire());
+  face.Add(hole_wire.Wire());
+  return face.Face();
+}
+
+TopoDS_Vertex Vertex(double x, double y) { return BRepBuilderAPI_MakeVertex(gp_Pnt(x, y, 0)); }
+TopoDS_Edge Line(const TopoDS_Vertex& a, const TopoDS_Vertex& b) {
+  return BRepBuilderAPI_MakeEdge(a, b);
+}
+
+// A straight edge from `a` to `b` built without BRepBuilderAPI's check that they are apart (an
+// edge shorter than its tolerance, as real files have).
+TopoDS_Edge ShortLine(const TopoDS_Vertex& a, const TopoDS_Vertex& b) {
+  const gp_Pnt pa = BRep_Tool::Pnt(a), pb = BRep_Tool::Pnt(b);
+  BRep_Builder builder;
+  TopoDS_Edge edge;
+  builder.MakeEdge(edge, new Geom_Line(pa, gp_Vec(pa, pb)), 1e-7);
+  builder.Add(edge, a.Oriented(TopAbs_FORWARD));
+  builder.Add(edge, b.Oriented(TopAbs_REVERSED));
+  builder.Range(edge, 0, pa.Distance(pb));
+  return edge;
+}
+
+// The model's vertex at (x, y, 0); 0 when there is none.
+int VertexAt(const Model& model, double x, double y) {
+  for (int v = 1; v <= model.vertices.Extent(); ++v)
+    if (BRep_Tool::Pnt(TopoDS::Vertex(model.vertices(v))).Distance(gp_Pnt(x, y, 0)) < 1e-12)
+      return v;
+  return 0;
+}
+
+// The model's edges between vertices `a` and `b` (model vertex ids).
+std::vector<int> EdgesBetween(const Model& model, int a, int b) {
+  std::vector<int> found;
+  for (int e = 1; e <= model.edge_count(); ++e) {
+    TopoDS_Vertex v0, v1;
+    TopExp::Vertices(model.edge(e), v0, v1);
+    const int i = model.vertices.FindIndex(v0), j = model.vertices.FindIndex(v1);
+    if ((i == a && j == b) || (i == b && j == a)) found.push_back(e);
+  }
+  return found;
+}
+
+// The nodes of the domain that stand for vertex `v` (a model vertex id).
+int NodesOfVertex(const FaceDomain& domain, int v) {
+  int n = 0;
+  for (const NodeRef& r : domain.ref) n += r.dim == 0 && r.entity == v;
+  return n;
+}
+
+// A LED's outline (issue 35): a round hole of radius 2.5 touches the bottom side of a 6 x 6.4
+// rectangle at the vertex where both are split, and the hole's pcurve reaches that vertex only up
+// to rounding (2.5 cos(3 pi / 2) = -4.6e-16, not 0).
+TEST(FaceDomainTest, LoopsThatTouchAtAVertexShareItsNode) {
+  const TopoDS_Vertex touch = Vertex(0, -5.4), top = Vertex(0, -0.4);
+  const TopoDS_Vertex corners[] = {Vertex(3, -5.4), Vertex(3, 1), Vertex(-3, 1), Vertex(-3, -5.4)};
+  const gp_Circ circle(gp_Ax2(gp_Pnt(0, -2.9, 0), gp::DZ()), 2.5);
+  // Clockwise: from the touching vertex over the left to the top, and back over the right.
+  const TopoDS_Edge left = BRepBuilderAPI_MakeEdge(circle, top, touch);
+  const TopoDS_Edge right = BRepBuilderAPI_MakeEdge(circle, touch, top);
+  const TopoDS_Face face = PlaneWithHole(
+      {Line(touch, corners[0]), Line(corners[0], corners[1]), Line(corners[1], corners[2]),
+       Line(corners[2], corners[3]), Line(corners[3], touch)},
+      {TopoDS::Edge(left.Reversed()), TopoDS::Edge(right.Reversed())});
+  auto model = LoadShape(face, "touch_at_vertex");
+  ASSERT_TRUE(model);
+  const int v = VertexAt(*model, 0, -5.4);
+  ASSERT_GT(v, 0);
+  FaceDomain domain;
+  ASSERT_TRUE(Domain(*model, 1, Grids(*model, 0.01), &domain).ok());
+  EXPECT_EQ(NodesOfVertex(domain, v), 1);
+  EXPECT_TRUE(FindConflicts(domain).empty());
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(MeshFaces(face, "touch_at_vertex_mesh", 0.01, &faces));
+  EXPECT_EQ(faces[0].status, FaceStatus::kOk) << faces[0].reason;
+  const double exact = 6 * 6.4 - M_PI * 2.5 * 2.5;
+  EXPECT_NEAR(MeshArea(faces[0]), exact, 0.01 * exact);
+}
+
+// A square hole whose left side lies on the outline's: two edges between the same two vertices,
+// one in each loop. The face has no width between them.
+TEST(FaceDomainTest, LoopsThatTouchAlongAChordLeaveItOut) {
+  const TopoDS_Vertex p = Vertex(0, 0.5), q = Vertex(0, 1.5);
+  const TopoDS_Vertex outer[] = {Vertex(0, 0), Vertex(4, 0), Vertex(4, 2), Vertex(0, 2)};
+  const TopoDS_Vertex inner[] = {Vertex(1, 1.5), Vertex(1, 0.5)};
+  const TopoDS_Face face =
+      PlaneWithHole({Line(p, outer[0]), Line(outer[0], outer[1]), Line(outer[1], outer[2]),
+                     Line(outer[2], outer[3]), Line(outer[3], q), Line(q, p)},
+                    {Line(p, q), Line(q, inner[0]), Line(inner[0], inner[1]), Line(inner[1], p)});
+  auto model = LoadShape(face, "touch_along_chord");
+  ASSERT_TRUE(model);
+  FaceDomain domain;
+  ASSERT_TRUE(Domain(*model, 1, Grids(*model, 0.01), &domain).ok());
+  const std::vector<int> sides =
+      EdgesBetween(*model, VertexAt(*model, 0, 0.5), VertexAt(*model, 0, 1.5));
+  ASSERT_EQ(sides.size(), 2u);
+  for (int id : sides)
+    EXPECT_EQ(std::count(domain.segment_edge.begin(), domain.segment_edge.end(), id), 0);
+  EXPECT_TRUE(FindConflicts(domain).empty());
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(MeshFaces(face, "touch_along_chord_mesh", 0.01, &faces));
+  EXPECT_EQ(faces[0].status, FaceStatus::kOk) << faces[0].reason;
+  EXPECT_NEAR(MeshArea(faces[0]), 8 - 1, 1e-9);
+}
+
+// A potentiometer's outline (issue 35): a round hole touches the left side, and both loops pass
+// the touching point along an edge of their own 2e-9 long, shorter than its tolerance, between
+// the same two vertices.
+TEST(FaceDomainTest, LoopsThatTouchAlongShortEdgesLeaveThemOut) {
+  const TopoDS_Vertex p = Vertex(0, 1), p2 = Vertex(0, 1 + 2e-9), east = Vertex(1, 1);
+  const TopoDS_Vertex outer[] = {Vertex(0, 0), Vertex(3, 0), Vertex(3, 2), Vertex(0, 2)};
+  const gp_Circ circle(gp_Ax2(gp_Pnt(0.5, 1, 0), gp::DZ()), 0.5);
+  // Clockwise: from the east over the bottom to the touching point, over the top back east.
+  const TopoDS_Edge bottom = BRepBuilderAPI_MakeEdge(circle, p, east);
+  const TopoDS_Edge top = BRepBuilderAPI_MakeEdge(circle, east, p2);
+  const TopoDS_Face face = PlaneWithHole(
+      {Line(p, outer[0]), Line(outer[0], outer[1]), Line(outer[1], outer[2]),
+       Line(outer[2], outer[3]), Line(outer[3], p2), ShortLine(p2, p)},
+      {TopoDS::Edge(bottom.Reversed()), ShortLine(p, p2), TopoDS::Edge(top.Reversed())});
+  auto model = LoadShape(face, "touch_along_collapsed");
+  ASSERT_TRUE(model);
+  const std::vector<EdgeGrid> grids = Grids(*model, 0.001);
+  FaceDomain domain;
+  ASSERT_TRUE(Domain(*model, 1, grids, &domain).ok());
+  int collapsed = 0;
+  for (const EdgeGrid& g : grids) collapsed += g.degenerate;
+  EXPECT_EQ(collapsed, 2);
+  // The two short edges lie on each other: the face has no width there.
+  for (int id = 1; id <= model->edge_count(); ++id)
+    if (grids[id - 1].degenerate)
+      EXPECT_EQ(std::count(domain.segment_edge.begin(), domain.segment_edge.end(), id), 0);
+  EXPECT_TRUE(FindConflicts(domain).empty());
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(MeshFaces(face, "touch_along_collapsed_mesh", 0.001, &faces));
+  EXPECT_EQ(faces[0].status, FaceStatus::kOk) << faces[0].reason;
+  const double exact = 6 - M_PI * 0.25;
+  EXPECT_NEAR(MeshArea(faces[0]), exact, 0.01 * exact);
 }
 
 }  // namespace
