@@ -1,5 +1,6 @@
 #include "worker/worker.h"
 
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -8,9 +9,9 @@
 #include <condition_variable>
 #include <csignal>
 #include <cstdlib>
+#include <cstring>
 #include <deque>
 #include <exception>
-#include <fstream>
 #include <mutex>
 #include <new>
 #include <string>
@@ -86,14 +87,19 @@ pb::ModelInfo Describe(const CachedModel& entry, bool cached) {
   return info;
 }
 
-/// The process's peak address-space size (VmPeak), bytes; 0 when unknown.
+/// The process's peak address-space size (VmPeak), bytes; 0 when unknown. Read into a stack
+/// buffer: it is asked right after an allocation failed, when the heap may have nothing left
+/// (an ifstream's buffer then throws std::bad_alloc outside any handler, and the worker aborts).
 uint64_t PeakAddressSpace() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("VmPeak:", 0) == 0) return std::strtoull(line.c_str() + 7, nullptr, 10) << 10;
-  }
-  return 0;
+  const int fd = open("/proc/self/status", O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return 0;
+  char text[8192];  // the whole file: about 1.5 KiB
+  const ssize_t size = read(fd, text, sizeof(text) - 1);
+  close(fd);
+  if (size <= 0) return 0;
+  text[size] = '\0';
+  const char* peak = std::strstr(text, "\nVmPeak:");
+  return peak != nullptr ? std::strtoull(peak + 8, nullptr, 10) << 10 : 0;
 }
 
 Status OutOfMemory(uint64_t limit, const std::string& phase) {
