@@ -6,9 +6,8 @@
 #include <utility>
 
 #include "rdmesh/atomic_file.h"
+#include "rdmesh/model_info.h"
 #include "rdmesh/sha256.h"
-#include "wire/convert.h"
-#include "worker/model_cache.h"
 
 namespace rdmesh::server {
 namespace {
@@ -66,8 +65,7 @@ Result<std::shared_ptr<const StoredModel>> ModelIndex::GetOrParse(const std::str
   *was_cached = false;
   if (bytes.empty()) return Status(StatusCode::kParseError, "the model file is empty (0 bytes)");
   const std::string id = Sha256Hex(bytes);
-  if (format == ModelFormat::kAuto) format = FormatFromName(name);
-  if (format == ModelFormat::kAuto) format = SniffFormat(bytes);
+  format = ResolveFormat(format, name, bytes);  // the engine's rule, as the worker will read it
   std::shared_ptr<Parsing> parsing;
   {
     std::unique_lock<std::mutex> lock(mutex_);

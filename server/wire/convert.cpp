@@ -1,7 +1,6 @@
 #include "wire/convert.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -19,12 +18,6 @@ Status CheckLength(const char* name, double value) {
     return Invalid(std::string(name) + " must be >= 0 (got " + std::to_string(value) + ")");
   }
   return Status::Ok();
-}
-
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
 }
 
 template <typename T, typename Field>
@@ -161,16 +154,6 @@ pb::ModelFormat ToProto(ModelFormat format) {
       break;
   }
   return pb::MODEL_FORMAT_UNSPECIFIED;
-}
-
-ModelFormat FormatFromName(const std::string& name) {
-  const std::size_t dot = name.rfind('.');
-  if (dot == std::string::npos) return ModelFormat::kAuto;
-  const std::string ext = Lower(name.substr(dot + 1));
-  if (ext == "step" || ext == "stp") return ModelFormat::kStep;
-  if (ext == "iges" || ext == "igs") return ModelFormat::kIges;
-  if (ext == "brep" || ext == "brp") return ModelFormat::kBrep;
-  return ModelFormat::kAuto;
 }
 
 pb::FaceStatus ToProto(FaceStatus status) {

@@ -34,8 +34,6 @@ ModelInfo FromProto(const pb::ModelInfo& in);
 
 ModelFormat FromProto(pb::ModelFormat format);
 pb::ModelFormat ToProto(ModelFormat format);
-/// The format a file name's extension names (.step/.stp, .iges/.igs, .brep/.brp), else kAuto.
-ModelFormat FormatFromName(const std::string& name);
 
 pb::FaceStatus ToProto(FaceStatus status);
 FaceStatus FromProto(pb::FaceStatus status);

@@ -3,20 +3,10 @@
 #include <chrono>
 #include <utility>
 
+#include "rdmesh/model_info.h"
 #include "rdmesh/sha256.h"
-#include "wire/convert.h"
 
 namespace rdmesh::server {
-
-ModelFormat SniffFormat(const std::string& bytes) {
-  const std::string head = bytes.substr(0, 4096);
-  if (head.find("ISO-10303-21") != std::string::npos) return ModelFormat::kStep;
-  if (head.find("CASCADE Topology") != std::string::npos) return ModelFormat::kBrep;
-  // IGES: fixed 80-column records; the first is a Start ('S') record.
-  const std::size_t eol = head.find_first_of("\r\n");
-  if (eol != std::string::npos && eol >= 73 && head[72] == 'S') return ModelFormat::kIges;
-  return ModelFormat::kAuto;
-}
 
 ModelCache::ModelCache(uint64_t limit_bytes, std::shared_ptr<const ModelStore> store)
     : limit_bytes_(limit_bytes), store_(std::move(store)) {}
@@ -56,8 +46,7 @@ Result<std::shared_ptr<const CachedModel>> ModelCache::GetOrLoad(const std::stri
     loading_[id] = loading;
   }
 
-  if (format == ModelFormat::kAuto) format = FormatFromName(name);
-  if (format == ModelFormat::kAuto) format = SniffFormat(bytes);
+  // The engine resolves kAuto (ResolveFormat: the name's extension, then the content).
   const auto start = std::chrono::steady_clock::now();
   StoreOutcome outcome;
   Result<std::shared_ptr<const Model>> model =

@@ -25,10 +25,6 @@ struct CachedModel {
   std::string store_problem;  ///< a discarded or unwritable store entry; "" when none
 };
 
-/// The format the bytes look like: STEP ("ISO-10303-21"), BREP ("CASCADE Topology") or IGES
-/// (80-column records with a section letter in column 73); kAuto when none fits.
-ModelFormat SniffFormat(const std::string& bytes);
-
 /// Content-addressed, bounded, least-recently-used cache of parsed models. Costs are file bytes
 /// (a parsed model takes a few times that in memory). The newest entry is always kept, even when
 /// it alone passes the limit. The same bytes loaded by two requests at once are parsed once.

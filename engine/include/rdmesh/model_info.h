@@ -46,4 +46,15 @@ enum class ModelFormat { kAuto, kStep, kIges, kBrep };
 /// kAuto when the extension is none of these.
 ModelFormat FormatFromExtension(const std::string& path);
 
+/// The format a file's first bytes show, or kAuto when none matches: STEP starts with
+/// "ISO-10303-21" (after white space and a UTF-8 byte order mark), BREP holds "CASCADE Topology"
+/// or "DBRep_DrawableShape" in its first 512 bytes, IGES starts with an 80-column line (73 to 82
+/// characters) with 'S' in column 73.
+ModelFormat FormatFromContent(const std::string& bytes);
+
+/// The format a model is read as: `format` unless kAuto, else the one `name`'s extension names,
+/// else the one `bytes` show; kAuto when none fits. The one rule of LoadModel,
+/// LoadModelFromBytes, the model store and the service.
+ModelFormat ResolveFormat(ModelFormat format, const std::string& name, const std::string& bytes);
+
 }  // namespace rdmesh

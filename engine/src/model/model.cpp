@@ -299,7 +299,8 @@ Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context*
   if (!bytes.ok()) return bytes.status();
   std::string name = std::filesystem::path(path).filename().string();
   Result<CanonicalModel> parsed =
-      ParseCanonical(*bytes, FormatFromExtension(path), path, path, name, context);
+      ParseCanonical(*bytes, ResolveFormat(ModelFormat::kAuto, path, *bytes), path, path, name,
+                     context);
   if (!parsed.ok()) return parsed.status();
   return parsed->model;
 }
@@ -307,8 +308,8 @@ Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context*
 Result<std::shared_ptr<const Model>> LoadModelFromBytes(const std::string& bytes,
                                                         ModelFormat format, const std::string& name,
                                                         Context* context) {
-  if (format == ModelFormat::kAuto) format = FormatFromExtension(name);
-  Result<CanonicalModel> parsed = ParseCanonical(bytes, format, "", name, name, context);
+  Result<CanonicalModel> parsed =
+      ParseCanonical(bytes, ResolveFormat(format, name, bytes), "", name, name, context);
   if (!parsed.ok()) return parsed.status();
   return parsed->model;
 }

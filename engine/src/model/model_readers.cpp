@@ -517,6 +517,12 @@ ModelFormat FormatFromContent(const std::string& bytes) {
   return ModelFormat::kAuto;
 }
 
+ModelFormat ResolveFormat(ModelFormat format, const std::string& name, const std::string& bytes) {
+  if (format == ModelFormat::kAuto) format = FormatFromExtension(name);
+  if (format == ModelFormat::kAuto) format = FormatFromContent(bytes);
+  return format;
+}
+
 Status CheckStepBytes(const std::string& bytes, const std::string& name) {
   std::lock_guard<std::mutex> lock(ReaderMutex());
   SilenceOcctMessages();

@@ -1,5 +1,6 @@
 #pragma once
-// Format detection and the OCCT readers behind LoadModel. Internal to the engine (model.cpp).
+// The OCCT readers behind LoadModel; format detection (FormatFromContent, ResolveFormat) is
+// public, in rdmesh/model_info.h. Internal to the engine (model.cpp).
 
 #include <string>
 
@@ -9,11 +10,6 @@
 #include "rdmesh/status.h"
 
 namespace rdmesh {
-
-/// The format recognised from a file's first bytes, or kAuto when none matches: STEP starts with
-/// "ISO-10303-21", BREP holds "CASCADE Topology" near its start, IGES has 80-column lines with
-/// 'S' in column 73.
-ModelFormat FormatFromContent(const std::string& bytes);
 
 /// Reads `bytes` (the whole file) as `format` (not kAuto). `path` is the file on disk when there
 /// is one (IGES is read from a file; a temporary one is written when `path` is empty). `name`

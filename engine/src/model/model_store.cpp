@@ -88,15 +88,6 @@ bool DecodeDerived(const std::string& bytes, DerivedValues* derived) {
   return real(&derived->diagonal) && at == bytes.size();
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same directory, fsync, rename.
-/// The format LoadModelFromBytes reads `bytes` as: `format`, else `name`'s extension, else the
-/// content; kAuto when none fits.
-ModelFormat ResolveFormat(ModelFormat format, const std::string& name, const std::string& bytes) {
-  if (format == ModelFormat::kAuto) format = FormatFromExtension(name);
-  if (format == ModelFormat::kAuto) format = FormatFromContent(bytes);
-  return format;
-}
-
 }  // namespace
 
 ModelStore::ModelStore(std::string dir, uint64_t limit_bytes)

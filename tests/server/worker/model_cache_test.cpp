@@ -22,16 +22,6 @@ std::string ReadData(const std::string& name) {
   return out.str();
 }
 
-TEST(SniffFormatTest, RecognisesStepBrepAndIges) {
-  EXPECT_EQ(SniffFormat(ReadData("cq_red_cube_blue_cylinder.step")), ModelFormat::kStep);
-  EXPECT_EQ(SniffFormat("DBRep_DrawableShape\n\nCASCADE Topology V1, (c) Matra-Datavision\n"),
-            ModelFormat::kBrep);
-  std::string iges(72, ' ');
-  iges += "S      1\n";
-  EXPECT_EQ(SniffFormat(iges), ModelFormat::kIges);
-  EXPECT_EQ(SniffFormat("garbage"), ModelFormat::kAuto);
-}
-
 TEST(ModelCacheTest, SameBytesAreParsedOnce) {
   const std::string bytes = ReadData("cq_red_cube_blue_cylinder.step");
   ASSERT_FALSE(bytes.empty());
