@@ -2,7 +2,8 @@
 """Issue 34's end-to-end table: a STEP file to a mesh on disk, `rdmesh mesh` against OCCT's plain
 read + BRepMesh + an MSH write (bench/performance/plain_runner.cpp), whole processes, wall time.
 
-    /usr/bin/python3 bench/performance/parse_e2e.py --kicad-root /tmp/kicad/usr/share/kicad/3dmodels \
+    /usr/bin/python3 bench/performance/parse_e2e.py \
+        --kicad-root /tmp/kicad/usr/share/kicad/3dmodels \
         --rdmesh build/bin/rdmesh --plain-runner build/bin/plain_runner [--service]
 
 Files: the KiCad 3D model library (Debian's kicad-packages3d; fetched with `apt-get download` and
@@ -43,8 +44,10 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 CORPUS = REPO.parent / "shared" / "corpus"
 STEP_SUFFIXES = (".step", ".stp")
 REL = 1e-3
-# Environment variables that would change what a run measures (a model store, no fork, threads).
-DROPPED_ENV = ("RDMESH_CACHE_DIR", "RDMESH_CACHE_DIR_BYTES", "RDMESH_NO_FORK", "RDMESH_THREADS")
+# Environment variables that would change what a run measures (a model store, no fork, threads,
+# the STEP reader); --rdmesh-env sets them explicitly.
+DROPPED_ENV = ("RDMESH_CACHE_DIR", "RDMESH_CACHE_DIR_BYTES", "RDMESH_NO_FORK", "RDMESH_THREADS",
+               "RDMESH_STEP_READER")
 SERIAL = True  # one process at a time (--jobs 1): the children's CPU time is the one run's
 TIMEOUT = 900.0  # seconds per process (--timeout)
 
@@ -96,8 +99,13 @@ def fetch_kicad(cache_dir):
 
 # -- measuring --------------------------------------------------------------------------------
 
-def child_env():
-    return {k: v for k, v in os.environ.items() if k not in DROPPED_ENV}
+def child_env(extra=()):
+    """The environment of every run: ours without DROPPED_ENV, plus `extra` ("KEY=VALUE")."""
+    env = {k: v for k, v in os.environ.items() if k not in DROPPED_ENV}
+    for item in extra:
+        key, _, value = item.partition("=")
+        env[key] = value
+    return env
 
 
 def last_json(text):
@@ -130,7 +138,11 @@ def timed(command, env, ok_codes=(0,)):
     run = {"wall": wall, "cpu": cpu, "code": proc.returncode,
            "report": last_json(proc.stdout.decode(errors="replace"))}
     if proc.returncode not in ok_codes:
-        run["error"] = (proc.stderr.decode(errors="replace").strip().splitlines() or [""])[-1][:200]
+        last = (proc.stderr.decode(errors="replace").strip().splitlines() or [""])[-1]
+        # The file's path is in the row already.
+        for arg in command[1:3]:
+            last = last.replace("'%s'" % arg, "FILE") if arg.endswith(STEP_SUFFIXES) else last
+        run["error"] = "exit %s: %s" % (proc.returncode, last[:160])
     return run
 
 
@@ -150,8 +162,8 @@ def flat_stages(stages, prefix=""):
     flat = {}
     for key, value in (stages or {}).items():
         if isinstance(value, dict):
-            inner = flat_stages(value, "" if not prefix and len(stages) == 1 else prefix + key + ".")
-            flat.update(inner)
+            inner = "" if not prefix and len(stages) == 1 else prefix + key + "."
+            flat.update(flat_stages(value, inner))
         elif isinstance(value, (int, float)) and not isinstance(value, bool):
             flat[prefix + key] = value
     return flat
@@ -185,8 +197,9 @@ def measure_file(path, group, args, work_dir, env, rounds):
 
 
 def summarize_file(path, group, runs):
-    row = {"file": str(path), "name": pathlib.Path(path).name, "group": group,
-           "folder": pathlib.Path(path).parent.name, "size_bytes": pathlib.Path(path).stat().st_size}
+    path = pathlib.Path(path)
+    row = {"file": str(path), "name": path.name, "group": group, "folder": path.parent.name,
+           "size_bytes": path.stat().st_size}
     errors = {side: next((r["error"] for r in rs if "error" in r), None)
               for side, rs in runs.items()}
     row["errors"] = {k: v for k, v in errors.items() if v}
@@ -392,9 +405,10 @@ def render(results):
     L.append("Issue 34's end-to-end table, written by `bench/performance/parse_e2e.py` "
              "(its docstring says how it measures). Made with:")
     L += ["", "```", meta["command"], "```", ""]
-    L.append("- date: %s; commit `%s`%s" % (meta["date"], meta["commit"],
-                                             " (with uncommitted changes in the tree)"
-                                             if meta.get("dirty") else ""))
+    L.append("- date: %s; commit `%s`%s%s" % (
+        meta["date"], meta["commit"], " (with uncommitted changes in the tree)"
+        if meta.get("dirty") else "", "; the rdmesh binary was built at %s from the working "
+        "tree" % meta["rdmesh_built"] if meta.get("rdmesh_built") else ""))
     L.append("- machine: %s, %d cores (nproc), %s" % (meta["cpu"], meta["nproc"], meta["os"]))
     L.append("- load average before: %s; after: %s. The machine is shared: other work was "
              "running during the measurement (the load average above the core count says how "
@@ -406,6 +420,10 @@ def render(results):
              "OneShape, BRepMesh_IncrementalMesh at 1e-3 of the BRepBndLib::Add box's diagonal and "
              "0.5 rad in parallel, MSH 4.1 write). Outputs in `%s`." % (
                  meta["rdmesh"], meta["plain_runner"], meta["work_dir"]))
+    L.append("- environment of the runs: %s" % (
+        ", ".join("`%s`" % e for e in meta["env"]) if meta.get("env") else
+        "the caller's, without %s (so rdmesh reads with its default reader, keeps no model "
+        "store and forks its reader child)" % ", ".join(DROPPED_ENV)))
     L.append("- files: %s" % meta["files_note"])
     L += ["", "## Summary", ""]
     L.append("Ratio = rdmesh's median wall time / the plain runner's, per file; the issue's goal "
@@ -449,8 +467,8 @@ def render(results):
         L += ["", "### Fixed cost per process", ""]
         L.append("Medians of %d alternating runs." % fixed["pairs"])
         L += ["", "| | rdmesh | plain runner | ratio |", "|---|---:|---:|---:|"]
-        L.append("| start-up wall s (`rdmesh --help` / `plain_runner` usage) | %.3f | %.3f | %.2fx |"
-                 % (fixed["rdmesh_start_wall"], fixed["plain_start_wall"],
+        L.append("| start-up wall s (`rdmesh --help` / `plain_runner` usage) "
+                 "| %.3f | %.3f | %.2fx |" % (fixed["rdmesh_start_wall"], fixed["plain_start_wall"],
                     fixed["rdmesh_start_wall"] / fixed["plain_start_wall"]))
         L.append("| start-up CPU s | %s | %s | %s |" % (
             fmt(fixed["rdmesh_start_cpu"]), fmt(fixed["plain_start_cpu"]),
@@ -487,11 +505,13 @@ def render(results):
             geomean([s.get("ratio") for s in service]), "%.2fx"))
     L += ["", "## Per file", ""]
     L.append("Wall seconds are medians of %d; `load` is rdmesh's load_seconds, `read+tr` the "
-             "plain runner's read + transfer seconds; triangles: rdmesh / BRepMesh." % meta["rounds"])
+             "plain runner's read + transfer seconds; `mesh` and triangles: rdmesh (its "
+             "`seconds`) / BRepMesh (the runner's mesh_seconds); a failed face is marked."
+             % meta["rounds"])
     stages = any(r.get("load_stage_seconds") for r in rows)
     head = ("| group | file | faces | rdmesh s | plain s | ratio | CPU ratio | load s | read+tr s "
-            "| load ratio | triangles |" + (" load stages |" if stages else ""))
-    L += ["", head, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+            "| load ratio | mesh s | triangles |" + (" load stages |" if stages else ""))
+    L += ["", head, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
           + ("---|" if stages else "")]
     for r in sorted(rows, key=lambda r: (r["group"] != "kicad", r["folder"], r["name"])):
         name = ("%s/%s" % (r["folder"], r["name"])) if r["group"] == "kicad" else r["name"]
@@ -504,7 +524,10 @@ def render(results):
                  fmt(r["rdmesh_cpu"] / r["plain_cpu"] if r.get("plain_cpu") else None, "%.2fx"),
                  fmt(r.get("load_seconds")), fmt(r.get("plain_read_transfer")),
                  fmt(r.get("load_ratio"), "%.2fx"),
-                 "%s / %s" % (r.get("triangles"), r.get("plain_triangles"))]
+                 "%s / %s" % (fmt(r.get("mesh_seconds")), fmt(r.get("plain_mesh_seconds"))),
+                 "%s / %s%s" % (r.get("triangles"), r.get("plain_triangles"),
+                                " (%s faces failed)" % r["faces_failed"]
+                                if r.get("faces_failed") else "")]
         if stages:
             cells.append(", ".join("%s %.3f" % kv for kv in r["load_stage_seconds"].items())
                          if r.get("load_stage_seconds") else "-")
@@ -543,6 +566,9 @@ def parser():
     p.add_argument("--rdmesh", default=str(REPO / "build" / "bin" / "rdmesh"))
     p.add_argument("--plain-runner", default=str(REPO / "build" / "bin" / "plain_runner"))
     p.add_argument("--rdmeshd", default=None, help="default: rdmeshd beside --rdmesh")
+    p.add_argument("--rdmesh-env", action="append", default=[], metavar="KEY=VALUE",
+                   help="set for every run, e.g. RDMESH_STEP_READER=rdmesh (the runs otherwise "
+                        "drop %s from the environment)" % ", ".join(DROPPED_ENV))
     p.add_argument("--kicad-root", help="an extracted kicad-packages3d 3dmodels folder")
     p.add_argument("--kicad-dir", default="~/.cache/rdmesh-bench",
                    help="where kicad-packages3d is downloaded and extracted without --kicad-root")
@@ -601,7 +627,7 @@ def main(argv=None):
     shm = pathlib.Path("/dev/shm")
     work_dir = pathlib.Path(tempfile.mkdtemp(prefix="parse-e2e-",
                                              dir=str(shm) if shm.is_dir() else None))
-    env = child_env()
+    env = child_env(args.rdmesh_env)
     cpu, nproc, os_name = machine()
     meta = {"command": " ".join(shlex.quote(a) for a in ["/usr/bin/python3",
                                                            os.path.relpath(__file__, REPO)]
@@ -611,9 +637,11 @@ def main(argv=None):
                                                                   "--untracked-files=no")),
             "cpu": cpu, "nproc": nproc, "os": os_name, "rounds": args.rounds,
             "rdmesh": args.rdmesh, "plain_runner": args.plain_runner,
+            "rdmesh_built": datetime.datetime.fromtimestamp(os.path.getmtime(
+                args.rdmesh)).astimezone().strftime("%Y-%m-%d %H:%M %Z"),
             "work_dir": "tmpfs (/dev/shm)" if str(work_dir).startswith("/dev/shm") else
             str(work_dir.parent), "files_note": "; ".join(notes),
-            "load_before": load_average()}
+            "load_before": load_average(), "env": args.rdmesh_env}
     results = {"meta": meta}
     try:
         rows = []

@@ -4,6 +4,7 @@ the summary, and a whole run on stand-in binaries. No rdmesh needed."""
 import importlib.util
 import json
 import math
+import os
 import pathlib
 import stat
 
@@ -161,3 +162,12 @@ echo '{"read_seconds": 0.01, "transfer_seconds": 0.01, "faces": 2, "triangles": 
     again = tmp_path / "again.md"
     e2e.main(["--results-only", str(results), "--out", str(again)])
     assert again.read_text() == text
+
+
+def test_child_env_drops_what_changes_a_run(e2e, monkeypatch):
+    monkeypatch.setenv("RDMESH_CACHE_DIR", "/tmp/store")
+    monkeypatch.setenv("RDMESH_STEP_READER", "rdmesh")
+    env = e2e.child_env()
+    assert "RDMESH_CACHE_DIR" not in env and "RDMESH_STEP_READER" not in env
+    assert env["PATH"] == os.environ["PATH"]
+    assert e2e.child_env(["RDMESH_STEP_READER=rdmesh"])["RDMESH_STEP_READER"] == "rdmesh"
