@@ -64,7 +64,8 @@ struct Options {
   int threads = 0;
   double timeout = 600;
   double area_rel = 1e-9;
-  bool isolate = true;  ///< --no-fork runs each file in this process (for debuggers)
+  bool isolate = true;     ///< --no-fork runs each file in this process (for debuggers)
+  bool ours_only = false;  ///< --ours-only: our read alone, no OCCT read or comparison (profiles)
 };
 
 // Reads and compares one file; returns its JSON line. Runs in the child.
@@ -96,7 +97,9 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
     translate_s = Since(start);
     if (!ours.ok()) ours_error = ours.status().message();
   };
-  if (ours_first) {
+  if (options.ours_only) {
+    run_ours();
+  } else if (ours_first) {
     run_ours();
     run_occt();
   } else {
@@ -116,7 +119,7 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
                 parse_s, translate_s, parse_s + translate_s, occt_s);
   line += numbers;
   bool equivalent = false;
-  if (supported && occt.ok()) {
+  if (supported && occt.ok() && !options.ours_only) {
     rdmesh::step::ShapeSummary a = rdmesh::step::Summarize(ours->read, options.threads);
     rdmesh::step::ShapeSummary b = rdmesh::step::Summarize(*occt, options.threads);
     rdmesh::step::Comparison comparison = rdmesh::step::Compare(a, b, options.area_rel);
@@ -126,6 +129,8 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
                   comparison.worst_area_rel, comparison.worst_box_rel);
     line += numbers;
     if (!equivalent) line += ", \"difference\": " + Json(comparison.difference);
+    if (!comparison.numbering_difference.empty())
+      line += ", \"numbering\": " + Json(comparison.numbering_difference);
     if (ours->read.length_unit != occt->length_unit ||
         ours->read.unit_scale_mm != occt->unit_scale_mm) {
       equivalent = false;
@@ -134,6 +139,9 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
   }
   line += ", \"equivalent\": " + std::string(equivalent ? "true" : "false");
   if (supported) {
+    line += ", \"items\": " + std::to_string(ours->items) +
+            ", \"items_healed_by_face\": " + std::to_string(ours->items_healed_by_face);
+    if (!ours->heal_note.empty()) line += ", \"heal_note\": " + Json(ours->heal_note);
     line += ", \"stages\": {";
     bool first = true;
     for (const auto& [stage, seconds] : ours->stage_seconds) {
@@ -225,6 +233,8 @@ int main(int argc, char** argv) {
       options.threads = std::atoi(argv[++i]);
     } else if (arg == "--timeout" && i + 1 < argc) {
       options.timeout = std::atof(argv[++i]);
+    } else if (arg == "--ours-only") {
+      options.ours_only = true;
     } else if (arg == "--no-fork") {
       options.isolate = false;
     } else if (arg == "--area-rel" && i + 1 < argc) {

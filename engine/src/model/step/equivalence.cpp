@@ -3,6 +3,7 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepGProp.hxx>
+#include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
 #include <Quantity_ColorRGBA.hxx>
@@ -13,6 +14,7 @@
 #include <TopExp.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Iterator.hxx>
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
@@ -125,8 +127,22 @@ ShapeSummary Summarize(const ReadShape& read, int threads) {
   if (shape.IsNull()) return summary;
   summary.solids = Count(shape, TopAbs_SOLID);
   summary.shells = Count(shape, TopAbs_SHELL);
-  summary.edges = Count(shape, TopAbs_EDGE);
-  summary.vertices = Count(shape, TopAbs_VERTEX);
+  TopTools_IndexedMapOfShape edges, vertices;
+  TopExp::MapShapes(shape, TopAbs_EDGE, edges);
+  TopExp::MapShapes(shape, TopAbs_VERTEX, vertices);
+  summary.edges = edges.Extent();
+  summary.vertices = vertices.Extent();
+  for (int i = 1; i <= vertices.Extent(); ++i) {
+    const gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(vertices(i)));
+    summary.vertex_points.push_back({p.X(), p.Y(), p.Z()});
+  }
+  for (int i = 1; i <= edges.Extent(); ++i) {
+    std::string text;
+    for (TopoDS_Iterator it(edges(i), Standard_False); it.More(); it.Next())
+      text += std::to_string(vertices.FindIndex(it.Value())) + "/" +
+              std::to_string(static_cast<int>(it.Value().Orientation())) + " ";
+    summary.edge_vertices.push_back(text);
+  }
   TopTools_IndexedMapOfShape faces;
   TopExp::MapShapes(shape, TopAbs_FACE, faces);
   summary.faces = faces.Extent();
@@ -226,6 +242,19 @@ Comparison Compare(const ShapeSummary& ours, const ShapeSummary& theirs, double 
     differ("document line " + std::to_string(i + 1) + ": '" +
            (i < ours.document.size() ? ours.document[i] : std::string("(end)")) + "' vs '" +
            (i < theirs.document.size() ? theirs.document[i] : std::string("(end)")) + "'");
+  }
+  if (ours.vertices != theirs.vertices) {
+    result.numbering_difference =
+        "vertices " + std::to_string(ours.vertices) + " vs " + std::to_string(theirs.vertices);
+  } else if (ours.vertex_points != theirs.vertex_points) {
+    result.numbering_difference = "vertex order";
+  } else if (ours.edge_vertices != theirs.edge_vertices) {
+    for (size_t i = 0; i < ours.edge_vertices.size() && i < theirs.edge_vertices.size(); ++i) {
+      if (ours.edge_vertices[i] == theirs.edge_vertices[i]) continue;
+      result.numbering_difference = "edge " + std::to_string(i + 1) + " vertices " +
+                                    ours.edge_vertices[i] + "vs " + theirs.edge_vertices[i];
+      break;
+    }
   }
   result.equivalent = result.difference.empty();
   return result;

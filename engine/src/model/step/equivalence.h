@@ -16,7 +16,11 @@ struct ShapeSummary {
   int solids = 0, shells = 0, faces = 0, edges = 0, vertices = 0;
   std::vector<int> face_types;     ///< GeomAbs_SurfaceType per face
   std::vector<double> face_areas;  ///< BRepGProp surface area per face
-  std::array<double, 6> box{};     ///< BRepBndLib::AddOptimal, without tolerances
+  /// Per edge (TopExp::MapShapes order): its vertices' ids in the edge's own order, with their
+  /// orientations, so edge and vertex numbering can be compared.
+  std::vector<std::string> edge_vertices;
+  std::vector<std::array<double, 3>> vertex_points;  ///< per vertex id
+  std::array<double, 6> box{};                       ///< BRepBndLib::AddOptimal, without tolerances
   bool has_box = false;
   /// The document as lines: every label under the free shapes with its kind (assembly,
   /// instance with its placement, part), name, colours and coloured sub-shapes (by face index).
@@ -32,6 +36,9 @@ struct Comparison {
   std::string difference;     ///< the first difference found, "" when equivalent
   double worst_area_rel = 0;  ///< largest |a - b| / max(|a|, |b|) over faces
   double worst_box_rel = 0;   ///< largest box coordinate difference / box diagonal
+  /// Where vertex numbering or the vertices of edges differ (not part of `equivalent`: the
+  /// engine numbers faces and edges, and those are compared), "" when identical.
+  std::string numbering_difference;
 };
 
 /// Compares two summaries: exact counts, types and document; areas within `area_rel`

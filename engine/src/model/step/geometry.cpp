@@ -118,7 +118,10 @@ std::optional<gp_Dir> Geometry::Direction(uint64_t id, uint64_t from) const {
   if (Precision::IsInfinite(x) || Precision::IsInfinite(y) || Precision::IsInfinite(z))
     return std::nullopt;
   if (!(gp_XYZ(x, y, z).SquareModulus() > gp::Resolution() * gp::Resolution())) return std::nullopt;
-  return gp_Dir(x, y, z);
+  // As StepToGeom's Geom_Direction: normalised once when made, once more by Dir().
+  const double d = sqrt(x * x + y * y + z * z);
+  if (d <= gp::Resolution()) return std::nullopt;
+  return gp_Dir(gp_Vec(x / d, y / d, z / d));
 }
 
 std::optional<gp_Dir2d> Geometry::Direction2d(uint64_t id, uint64_t from) const {
@@ -129,7 +132,9 @@ std::optional<gp_Dir2d> Geometry::Direction2d(uint64_t id, uint64_t from) const 
   const double x = direction.RealItem(ratios, 0);
   const double y = direction.RealItem(ratios, 1);
   if (!(gp_XY(x, y).SquareModulus() > gp::Resolution() * gp::Resolution())) return std::nullopt;
-  return gp_Dir2d(x, y);
+  const double d = sqrt(x * x + y * y);
+  if (d <= gp::Resolution()) return std::nullopt;
+  return gp_Dir2d(gp_Vec2d(x / d, y / d));  // as Geom2d_Direction: normalised twice
 }
 
 gp_Ax2 Geometry::Axis2Placement(uint64_t id, uint64_t from, const UnitFactors& units) const {
@@ -141,12 +146,15 @@ gp_Ax2 Geometry::Axis2Placement(uint64_t id, uint64_t from, const UnitFactors& u
     std::optional<gp_Dir> axis = Direction(placement.Ref(2), id);
     if (axis) normal = *axis;
   }
+  gp_Ax2 axes(origin, normal);
   if (!placement.IsUnset(3)) {
     std::optional<gp_Dir> x_direction = Direction(placement.Ref(3), id);
     if (x_direction && !normal.IsParallel(*x_direction, Precision::Angular()))
-      return gp_Ax2(origin, normal, *x_direction);
+      axes = gp_Ax2(origin, normal, *x_direction);
   }
-  return gp_Ax2(origin, normal);
+  // StepToGeom hands the placement over as a Geom_Axis2Placement, whose Ax2() builds the axes
+  // once more from their location, direction and X direction: the same rounding here.
+  return gp_Ax2(axes.Location(), axes.Direction(), axes.XDirection());
 }
 
 gp_Ax1 Geometry::Axis1Placement(uint64_t id, uint64_t from, const UnitFactors& units) const {

@@ -4,6 +4,10 @@
 #include <BRepLib.hxx>
 #include <BRepLib_MakeEdge.hxx>
 #include <BRep_Builder.hxx>
+#include <BRep_CurveRepresentation.hxx>
+#include <BRep_ListIteratorOfListOfCurveRepresentation.hxx>
+#include <BRep_TEdge.hxx>
+#include <BRep_TVertex.hxx>
 #include <BRep_Tool.hxx>
 #include <ElCLib.hxx>
 #include <GeomAdaptor_Curve.hxx>
@@ -26,13 +30,19 @@
 #include <ShapeFix_EdgeProjAux.hxx>
 #include <ShapeFix_Face.hxx>
 #include <ShapeFix_Shape.hxx>
+#include <ShapeFix_Shell.hxx>
 #include <ShapeFix_Solid.hxx>
 #include <ShapeFix_Wire.hxx>
 #include <Standard_ErrorHandler.hxx>
 #include <Standard_Failure.hxx>
 #include <StepToTopoDS_GeometricTool.hxx>
 #include <TopAbs.hxx>
+#include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_DataMapOfShapeReal.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_MapOfShape.hxx>
+#include <TopTools_ShapeMapHasher.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 #include <TopoDS_Edge.hxx>
@@ -42,9 +52,17 @@
 #include <TopoDS_Vertex.hxx>
 #include <XSAlgo.hxx>
 #include <XSAlgo_AlgoContainer.hxx>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+
+#include "core/parallel.h"
 
 namespace rdmesh::step {
 
@@ -681,6 +699,11 @@ TopoDS_Shape ItemBuilder::Build() {
   } else {
     ThrowUnsupported(entities_.Describe(instance) + " as a B-rep");
   }
+  // The vertices and edges as the tool left them bound (styled items may point at them).
+  for (const auto& [id, shape] : bound_) {
+    const TopAbs_ShapeEnum type = shape.ShapeType();
+    if (type == TopAbs_VERTEX || type == TopAbs_EDGE) item_->bound.emplace_back(id, shape);
+  }
   item_->curves.assign(curves_.begin(), curves_.end());
   return result;
 }
@@ -750,6 +773,515 @@ void HealItem(BrepItem* item) {
 TopoDS_Shape HealedShape(const BrepItem& item, const TopoDS_Shape& raw) {
   const TopoDS_Shape* found = item.modified.Seek(raw);
   return found != nullptr ? *found : raw;
+}
+
+namespace {
+
+// One face of one item, fixed on its own.
+struct FaceJob {
+  BrepItem* item = nullptr;
+  size_t item_index = 0;
+  TopoDS_Face raw;    // the face as it occurs in its shell
+  TopoDS_Face local;  // the private copy ShapeFix_Face works on
+  Handle(ShapeBuild_ReShape) context;
+  TopTools_DataMapOfShapeShape copies;  // raw edge or vertex (FORWARD) -> its private copy
+  TopoDS_Shape healed;
+  const char* failure = nullptr;        // why the result cannot be merged; null when it can
+  TopTools_DataMapOfShapeShape raw_of;  // healed edge or vertex -> the raw one
+  TopTools_DataMapOfShapeShape healed_of_shared;  // raw shared edge -> its healed copy
+  TopTools_DataMapOfShapeReal vertex_tolerances;  // raw vertex -> tolerance asked for
+};
+
+bool IsIdentity(const TopoDS_Shape& shape) { return shape.Location().IsIdentity(); }
+
+// A private copy of a vertex: same point, tolerance and point representations.
+TopoDS_Shape CopyVertex(const TopoDS_Shape& vertex, TopTools_DataMapOfShapeShape* copies) {
+  if (const TopoDS_Shape* found = copies->Seek(vertex)) return *found;
+  TopoDS_Shape copy = vertex.EmptyCopied();
+  copy.Orientation(TopAbs_FORWARD);
+  copies->Bind(vertex, copy);
+  return copy;
+}
+
+// A private copy of an edge for the face on `surface` at `location`: its 3D curve and its
+// representations on that surface only, its tolerance and flags, copies of its vertices.
+TopoDS_Shape CopyEdge(const TopoDS_Shape& edge, const Handle(Geom_Surface) & surface,
+                      const TopLoc_Location& location, TopTools_DataMapOfShapeShape* copies) {
+  if (const TopoDS_Shape* found = copies->Seek(edge)) return *found;
+  Handle(BRep_TEdge) raw = Handle(BRep_TEdge)::DownCast(edge.TShape());
+  BRep_Builder builder;
+  TopoDS_Edge copy;
+  builder.MakeEdge(copy);
+  Handle(BRep_TEdge) te = Handle(BRep_TEdge)::DownCast(copy.TShape());
+  for (BRep_ListIteratorOfListOfCurveRepresentation it(raw->Curves()); it.More(); it.Next()) {
+    const Handle(BRep_CurveRepresentation)& rep = it.Value();
+    if (rep->IsCurve3D()) {
+      te->ChangeCurves().Append(rep->Copy());
+    } else if (rep->IsCurveOnSurface(surface, location)) {
+      // ShapeFix reverses and shifts pcurves in place: the copy gets its own, so the raw face
+      // stays as built (for HealItem, should the merge be refused).
+      Handle(BRep_CurveRepresentation) copy = rep->Copy();
+      copy->PCurve(Handle(Geom2d_Curve)::DownCast(rep->PCurve()->Copy()));
+      if (rep->IsCurveOnClosedSurface())
+        copy->PCurve2(Handle(Geom2d_Curve)::DownCast(rep->PCurve2()->Copy()));
+      te->ChangeCurves().Append(copy);
+    }
+  }
+  te->Tolerance(raw->Tolerance());
+  te->SameParameter(raw->SameParameter());
+  te->SameRange(raw->SameRange());
+  te->Degenerated(raw->Degenerated());
+  for (TopoDS_Iterator it(edge, Standard_False, Standard_False); it.More(); it.Next()) {
+    TopoDS_Shape vertex = CopyVertex(it.Value().Oriented(TopAbs_FORWARD), copies);
+    builder.Add(copy, vertex.Oriented(it.Value().Orientation()));
+  }
+  copies->Bind(edge, copy);
+  return copy;
+}
+
+// The private copy of a face: its wires, edges and vertices anew, orientations and order kept.
+// False when the face holds located sub-shapes (BuildItem never makes them).
+bool CopyFace(FaceJob* job) {
+  TopLoc_Location location;
+  const Handle(Geom_Surface)& surface = BRep_Tool::Surface(job->raw, location);
+  if (!IsIdentity(job->raw)) return false;
+  BRep_Builder builder;
+  TopoDS_Shape face = job->raw.EmptyCopied();
+  face.Orientation(TopAbs_FORWARD);  // so the wires keep their own orientations
+  for (TopoDS_Iterator w(job->raw, Standard_False, Standard_False); w.More(); w.Next()) {
+    const TopoDS_Shape& wire = w.Value();
+    if (wire.ShapeType() != TopAbs_WIRE || !IsIdentity(wire)) return false;
+    TopoDS_Wire copy;
+    builder.MakeWire(copy);
+    for (TopoDS_Iterator e(wire, Standard_False, Standard_False); e.More(); e.Next()) {
+      const TopoDS_Shape& edge = e.Value();
+      if (edge.ShapeType() != TopAbs_EDGE || !IsIdentity(edge)) return false;
+      for (TopoDS_Iterator v(edge); v.More(); v.Next())
+        if (!IsIdentity(v.Value())) return false;
+      TopoDS_Shape local = CopyEdge(edge.Oriented(TopAbs_FORWARD), surface, location, &job->copies);
+      builder.Add(copy, local.Oriented(edge.Orientation()));
+    }
+    copy.Closed(wire.Closed());
+    builder.Add(face, copy.Oriented(wire.Orientation()));
+  }
+  job->local = TopoDS::Face(face.Oriented(job->raw.Orientation()));
+  return true;
+}
+
+// ShapeFix_Face on the copy, set up as ShapeFix_Shell's face tool is under XSAlgo's defaults.
+void FixFace(FaceJob* job) {
+  const UnitFactors& units = job->item->units;
+  Handle(ShapeFix_Face) fix = new ShapeFix_Face;
+  fix->SetPrecision(units.precision);
+  fix->SetMaxTolerance(units.max_tolerance);
+  fix->FixWireTool()->FixSameParameterMode() = Standard_False;
+  job->context = new ShapeBuild_ReShape;
+  fix->SetContext(job->context);
+  fix->Init(job->local);
+  fix->Perform();
+  job->healed = job->context->Apply(job->local);
+}
+
+// The vertex of `edge` with orientation `orientation` (FORWARD or REVERSED), or null.
+TopoDS_Shape VertexOf(const TopoDS_Shape& edge, TopAbs_Orientation orientation) {
+  for (TopoDS_Iterator it(edge, Standard_False, Standard_False); it.More(); it.Next())
+    if (it.Value().Orientation() == orientation) return it.Value();
+  return TopoDS_Shape();
+}
+
+// The uses of the item's shared edges by a face: (edge, orientation in the face), sorted.
+std::vector<std::pair<const void*, int>> SharedUses(const TopoDS_Shape& face,
+                                                    const TopTools_MapOfShape& shared,
+                                                    const TopTools_DataMapOfShapeShape* raw_of) {
+  std::vector<std::pair<const void*, int>> uses;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+    TopoDS_Shape edge = ex.Current();
+    if (raw_of != nullptr) {
+      const TopoDS_Shape* raw = raw_of->Seek(edge);
+      if (raw == nullptr) continue;
+      edge = raw->Oriented(edge.Orientation());
+    }
+    if (!shared.Contains(edge)) continue;
+    uses.emplace_back(edge.TShape().get(), static_cast<int>(edge.Orientation()));
+  }
+  std::sort(uses.begin(), uses.end());
+  return uses;
+}
+
+// Whether the fixing kept the face's ties to the other faces, so its copy can be merged back:
+// every edge it shares with another face used as before, on its own 3D curve and range, its
+// vertices where they were. Anything private to the face (a seam, an edge added at a pole, a
+// new surface) may change. Fills the records the merge reads.
+const char* CheckMergeable(FaceJob* job, const TopTools_MapOfShape& shared) {
+  if (job->healed.IsNull() || job->healed.ShapeType() != TopAbs_FACE) return "face split";
+  if (job->healed.Orientation() != job->local.Orientation()) return "face reversed";
+  if (!IsIdentity(job->healed)) return "located face";
+  for (TopTools_DataMapOfShapeShape::Iterator it(job->copies); it.More(); it.Next()) {
+    const TopoDS_Shape& raw = it.Key();
+    TopoDS_Shape healed = job->context->Apply(it.Value());
+    if (healed.IsNull() || healed.ShapeType() != raw.ShapeType()) {
+      if (raw.ShapeType() == TopAbs_VERTEX || shared.Contains(raw)) return "shared edge removed";
+      continue;
+    }
+    healed.Orientation(TopAbs_FORWARD);
+    if (job->raw_of.IsBound(healed)) return "two edges or vertices merged";
+    job->raw_of.Bind(healed, raw);
+    if (raw.ShapeType() == TopAbs_EDGE && shared.Contains(raw))
+      job->healed_of_shared.Bind(raw, healed);
+  }
+  if (SharedUses(job->raw, shared, nullptr) != SharedUses(job->healed, shared, &job->raw_of))
+    return "shared edges used differently";
+  for (TopTools_DataMapOfShapeShape::Iterator it(job->healed_of_shared); it.More(); it.Next()) {
+    const TopoDS_Edge& raw = TopoDS::Edge(it.Key());
+    const TopoDS_Edge& healed = TopoDS::Edge(it.Value());
+    TopLoc_Location lr, lh;
+    double fr, lr2, fh, lh2;
+    Handle(Geom_Curve) cr = BRep_Tool::Curve(raw, lr, fr, lr2);
+    Handle(Geom_Curve) ch = BRep_Tool::Curve(healed, lh, fh, lh2);
+    if (cr != ch || !lr.IsEqual(lh) || fr != fh || lr2 != lh2) return "shared edge's curve";
+    if (BRep_Tool::Degenerated(raw) != BRep_Tool::Degenerated(healed))
+      return "shared edge degenerated";
+    for (TopoDS_Iterator v(raw, Standard_False, Standard_False); v.More(); v.Next()) {
+      const TopoDS_Shape hv = VertexOf(healed, v.Value().Orientation());
+      if (hv.IsNull() || !IsIdentity(hv)) return "shared edge's vertex";
+      const TopoDS_Shape* back = job->raw_of.Seek(hv.Oriented(TopAbs_FORWARD));
+      if (back == nullptr || !back->IsSame(v.Value())) return "shared edge's vertex replaced";
+    }
+  }
+  // Vertices that come from raw ones stay where they were.
+  for (TopExp_Explorer ex(job->healed, TopAbs_VERTEX); ex.More(); ex.Next()) {
+    const TopoDS_Shape vertex = ex.Current().Oriented(TopAbs_FORWARD);
+    if (!IsIdentity(vertex)) return "located vertex";
+    const TopoDS_Shape* raw = job->raw_of.Seek(vertex);
+    if (raw == nullptr) continue;
+    if (!BRep_Tool::Pnt(TopoDS::Vertex(vertex)).IsEqual(BRep_Tool::Pnt(TopoDS::Vertex(*raw)), 0.))
+      return "vertex moved";
+    const double tolerance = BRep_Tool::Tolerance(TopoDS::Vertex(vertex));
+    if (double* known = job->vertex_tolerances.ChangeSeek(*raw))
+      *known = std::max(*known, tolerance);
+    else
+      job->vertex_tolerances.Bind(*raw, tolerance);
+  }
+  for (TopExp_Explorer ex(job->healed, TopAbs_EDGE); ex.More(); ex.Next())
+    if (!IsIdentity(ex.Current())) return "located edge";
+  return nullptr;
+}
+
+void Faces(const TopoDS_Shape& shape, std::vector<TopoDS_Face>* faces) {
+  if (shape.ShapeType() == TopAbs_FACE) {
+    faces->push_back(TopoDS::Face(shape));
+    return;
+  }
+  for (TopoDS_Iterator it(shape, Standard_False, Standard_False); it.More(); it.Next())
+    Faces(it.Value(), faces);
+}
+
+// The edges of `shape` that more than one of its faces use.
+TopTools_MapOfShape SharedEdges(const TopoDS_Shape& shape) {
+  TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+  TopExp::MapShapesAndAncestors(shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  TopTools_MapOfShape shared;
+  for (int i = 1; i <= edge_faces.Extent(); ++i) {
+    TopTools_MapOfShape faces;
+    for (const TopoDS_Shape& face : edge_faces(i)) faces.Add(face);
+    if (faces.Extent() > 1) shared.Add(edge_faces.FindKey(i).Oriented(TopAbs_FORWARD));
+  }
+  return shared;
+}
+
+// The merged item: the raw structure with every face replaced by its fixed copy, the edges
+// faces share made one again (the 3D curve, each face's pcurves, the largest tolerance), the
+// vertices too.
+class Merger {
+ public:
+  Merger(const std::vector<FaceJob*>& jobs, const TopTools_MapOfShape& shared)
+      : jobs_(jobs), shared_(shared) {
+    for (FaceJob* job : jobs_) {
+      job_of_.Bind(job->raw, job);
+      for (TopTools_DataMapOfShapeReal::Iterator it(job->vertex_tolerances); it.More(); it.Next()) {
+        if (double* known = vertex_tolerances_.ChangeSeek(it.Key()))
+          *known = std::max(*known, it.Value());
+        else
+          vertex_tolerances_.Bind(it.Key(), it.Value());
+      }
+    }
+  }
+
+  TopoDS_Shape Rebuild(const TopoDS_Shape& raw) {
+    if (raw.ShapeType() == TopAbs_FACE) {
+      TopoDS_Shape merged = Face(*job_of_.Find(raw));
+      faces_.Bind(raw, merged);
+      return merged.Oriented(raw.Orientation());
+    }
+    BRep_Builder builder;
+    TopoDS_Shape result = raw.EmptyCopied();
+    result.Orientation(TopAbs_FORWARD);
+    for (TopoDS_Iterator it(raw, Standard_False, Standard_False); it.More(); it.Next())
+      builder.Add(result, Rebuild(it.Value()));
+    result.Closed(raw.Closed());
+    return result.Oriented(raw.Orientation());
+  }
+
+  const TopTools_DataMapOfShapeShape& faces() const { return faces_; }
+
+  /// Raw edge -> merged edge, and raw vertex -> merged vertex for the vertices the faces'
+  /// fixing left as they were (OCCT's reader keeps such a vertex, and its colour).
+  TopTools_DataMapOfShapeShape RawToMerged() const {
+    TopTools_DataMapOfShapeShape map = edges_;
+    for (TopTools_DataMapOfShapeShape::Iterator it(private_edges_); it.More(); it.Next())
+      map.Bind(it.Key(), it.Value());
+    for (TopTools_DataMapOfShapeShape::Iterator it(vertices_); it.More(); it.Next()) {
+      const double* asked = vertex_tolerances_.Seek(it.Key());
+      if (asked == nullptr || *asked <= BRep_Tool::Tolerance(TopoDS::Vertex(it.Key())))
+        map.Bind(it.Key(), it.Value());
+    }
+    return map;
+  }
+
+ private:
+  TopoDS_Shape MergedVertex(const TopoDS_Shape& raw) {
+    if (const TopoDS_Shape* found = vertices_.Seek(raw)) return *found;
+    TopoDS_Shape merged = raw.EmptyCopied();
+    merged.Orientation(TopAbs_FORWARD);
+    if (const double* tolerance = vertex_tolerances_.Seek(raw))
+      Handle(BRep_TVertex)::DownCast(merged.TShape())->UpdateTolerance(*tolerance);
+    vertices_.Bind(raw, merged);
+    return merged;
+  }
+
+  // A vertex of a face's fixed copy, in the merged item.
+  TopoDS_Shape Vertex(const FaceJob& job, const TopoDS_Shape& healed) {
+    const TopoDS_Shape forward = healed.Oriented(TopAbs_FORWARD);
+    if (const TopoDS_Shape* raw = job.raw_of.Seek(forward)) return MergedVertex(*raw);
+    return forward;  // new, and the face's own
+  }
+
+  TopoDS_Shape SharedEdge(const TopoDS_Shape& raw) {
+    if (const TopoDS_Shape* found = edges_.Seek(raw)) return *found;
+    Handle(BRep_TEdge) source = Handle(BRep_TEdge)::DownCast(raw.TShape());
+    BRep_Builder builder;
+    TopoDS_Edge merged;
+    builder.MakeEdge(merged);
+    Handle(BRep_TEdge) te = Handle(BRep_TEdge)::DownCast(merged.TShape());
+    for (BRep_ListIteratorOfListOfCurveRepresentation it(source->Curves()); it.More(); it.Next())
+      if (it.Value()->IsCurve3D()) te->ChangeCurves().Append(it.Value()->Copy());
+    double tolerance = 0.;
+    bool same_parameter = true, same_range = true;
+    for (FaceJob* job : jobs_) {
+      const TopoDS_Shape* healed = job->healed_of_shared.Seek(raw);
+      if (healed == nullptr) continue;
+      Handle(BRep_TEdge) he = Handle(BRep_TEdge)::DownCast(healed->TShape());
+      for (BRep_ListIteratorOfListOfCurveRepresentation it(he->Curves()); it.More(); it.Next())
+        if (!it.Value()->IsCurve3D()) te->ChangeCurves().Append(it.Value()->Copy());
+      tolerance = std::max(tolerance, he->Tolerance());
+      same_parameter = same_parameter && he->SameParameter();
+      same_range = same_range && he->SameRange();
+    }
+    te->Tolerance(tolerance);
+    te->SameParameter(same_parameter);
+    te->SameRange(same_range);
+    te->Degenerated(source->Degenerated());
+    // The vertices in the order the last face whose fixing rebuilt the edge left them (a later
+    // rebuild keeps the order it finds), else as built.
+    const FaceJob* reordered = nullptr;
+    for (FaceJob* job : jobs_) {
+      const TopoDS_Shape* healed = job->healed_of_shared.Seek(raw);
+      if (healed != nullptr && !SameVertexOrder(*healed, raw, *job)) reordered = job;
+    }
+    if (reordered == nullptr) {
+      for (TopoDS_Iterator it(raw, Standard_False, Standard_False); it.More(); it.Next())
+        builder.Add(
+            merged,
+            MergedVertex(it.Value().Oriented(TopAbs_FORWARD)).Oriented(it.Value().Orientation()));
+    } else {
+      const TopoDS_Shape& healed = reordered->healed_of_shared.Find(raw);
+      for (TopoDS_Iterator it(healed, Standard_False, Standard_False); it.More(); it.Next())
+        builder.Add(merged, Vertex(*reordered, it.Value()).Oriented(it.Value().Orientation()));
+    }
+    edges_.Bind(raw, merged);
+    return merged;
+  }
+
+  // Whether `healed`, a face's copy of `raw`, lists its vertices in raw's order.
+  static bool SameVertexOrder(const TopoDS_Shape& healed, const TopoDS_Shape& raw,
+                              const FaceJob& job) {
+    TopoDS_Iterator h(healed, Standard_False, Standard_False);
+    TopoDS_Iterator r(raw, Standard_False, Standard_False);
+    for (; h.More() && r.More(); h.Next(), r.Next()) {
+      if (h.Value().Orientation() != r.Value().Orientation()) return false;
+      const TopoDS_Shape* back = job.raw_of.Seek(h.Value().Oriented(TopAbs_FORWARD));
+      if (back == nullptr || !back->IsSame(r.Value())) return false;
+    }
+    return !h.More() && !r.More();
+  }
+
+  // An edge of the face's own (new, or used by this face alone), its vertices merged.
+  TopoDS_Shape PrivateEdge(const FaceJob& job, const TopoDS_Shape& healed,
+                           TopTools_DataMapOfShapeShape* made) {
+    if (const TopoDS_Shape* found = made->Seek(healed)) return *found;
+    BRep_Builder builder;
+    TopoDS_Shape edge = healed.EmptyCopied();
+    edge.Orientation(TopAbs_FORWARD);
+    for (TopoDS_Iterator it(healed, Standard_False, Standard_False); it.More(); it.Next())
+      builder.Add(edge, Vertex(job, it.Value()).Oriented(it.Value().Orientation()));
+    made->Bind(healed, edge);
+    if (const TopoDS_Shape* raw = job.raw_of.Seek(healed)) private_edges_.Bind(*raw, edge);
+    return edge;
+  }
+
+  TopoDS_Shape Face(const FaceJob& job) {
+    BRep_Builder builder;
+    TopoDS_Shape face = job.healed.EmptyCopied();
+    face.Orientation(TopAbs_FORWARD);
+    TopTools_DataMapOfShapeShape made;
+    for (TopoDS_Iterator hw(job.healed, Standard_False, Standard_False); hw.More(); hw.Next()) {
+      const TopoDS_Shape& healed_wire = hw.Value();
+      TopoDS_Wire wire;
+      builder.MakeWire(wire);
+      for (TopoDS_Iterator he(healed_wire, Standard_False, Standard_False); he.More(); he.Next()) {
+        const TopoDS_Shape forward = he.Value().Oriented(TopAbs_FORWARD);
+        const TopoDS_Shape* raw = job.raw_of.Seek(forward);
+        TopoDS_Shape edge = (raw != nullptr && shared_.Contains(*raw))
+                                ? SharedEdge(*raw)
+                                : PrivateEdge(job, forward, &made);
+        builder.Add(wire, edge.Oriented(he.Value().Orientation()));
+      }
+      wire.Closed(healed_wire.Closed());
+      builder.Add(face, wire.Oriented(healed_wire.Orientation()));
+    }
+    return face;
+  }
+
+  const std::vector<FaceJob*>& jobs_;
+  const TopTools_MapOfShape& shared_;
+  NCollection_DataMap<TopoDS_Shape, FaceJob*, TopTools_ShapeMapHasher> job_of_;
+  TopTools_DataMapOfShapeReal vertex_tolerances_;
+  TopTools_DataMapOfShapeShape vertices_, edges_, faces_, private_edges_;
+};
+
+// The shell, solid, same-parameter and vertex-tolerance stages of ShapeFix_Shape, on an item
+// whose faces are fixed already.
+void FinishItem(BrepItem* item, const TopoDS_Shape& merged,
+                const TopTools_DataMapOfShapeShape& merged_faces,
+                const TopTools_DataMapOfShapeShape& merged_edges_vertices) {
+  item->healed = merged;
+  item->modified.Clear();
+  Handle(ShapeFix_Shape) fix = new ShapeFix_Shape;
+  fix->Init(merged);
+  fix->SetPrecision(item->units.precision);
+  fix->SetMaxTolerance(item->units.max_tolerance);
+  fix->FixFaceTool()->FixWireTool()->FixSameParameterMode() = Standard_False;
+  fix->FixSolidTool()->CreateOpenSolidMode() = Standard_False;
+  fix->FixShellTool()->FixFaceMode() = 0;
+  fix->Perform();
+  TopoDS_Shape result = fix->Shape();
+  if (!result.IsNull()) item->healed = result;
+  TopTools_DataMapOfShapeShape second;
+  if (!result.IsNull() && result != merged) RecordModifications(merged, fix->Context(), &second);
+  for (TopTools_DataMapOfShapeShape::Iterator it(merged_faces); it.More(); it.Next()) {
+    const TopoDS_Shape* again = second.Seek(it.Value());
+    item->modified.Bind(it.Key(), again != nullptr ? *again : it.Value());
+  }
+  for (TopTools_DataMapOfShapeShape::Iterator it(merged_edges_vertices); it.More(); it.Next()) {
+    if (it.Value().ShapeType() == TopAbs_VERTEX) {
+      // Kept only where the finishing stages left it, as OCCT's record goes no deeper than edges.
+      TopoDS_Shape replaced;
+      if (fix->Context()->Status(it.Value(), replaced, Standard_True) != 0 &&
+          !replaced.IsSame(it.Value()))
+        continue;
+      item->modified.Bind(it.Key(), it.Value());
+      continue;
+    }
+    const TopoDS_Shape* again = second.Seek(it.Value());
+    item->modified.Bind(it.Key(), again != nullptr ? *again : it.Value());
+  }
+}
+
+}  // namespace
+
+HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
+                    const std::function<bool()>& stop) {
+  HealStats stats;
+  auto start = std::chrono::steady_clock::now();
+  auto seconds = [&] {
+    const auto now = std::chrono::steady_clock::now();
+    const double elapsed = std::chrono::duration<double>(now - start).count();
+    start = now;
+    return elapsed;
+  };
+  std::vector<std::unique_ptr<FaceJob>> jobs;
+  std::vector<std::vector<FaceJob*>> item_jobs(items.size());
+  std::vector<TopTools_MapOfShape> shared(items.size());
+  for (size_t i = 0; i < items.size(); ++i) {
+    if (items[i]->raw.IsNull()) continue;
+    shared[i] = SharedEdges(items[i]->raw);
+    std::vector<TopoDS_Face> faces;
+    Faces(items[i]->raw, &faces);
+    for (const TopoDS_Face& face : faces) {
+      auto job = std::make_unique<FaceJob>();
+      job->item = items[i];
+      job->item_index = i;
+      job->raw = face;
+      item_jobs[i].push_back(job.get());
+      jobs.push_back(std::move(job));
+    }
+  }
+  const ParallelRunner runner(threads);
+  std::atomic<bool> stopped{false};
+  runner.For(
+      0, static_cast<int>(jobs.size()),
+      [&](int j) {
+        if (stopped.load() || (stop && stop())) {
+          stopped = true;
+          return;
+        }
+        FaceJob* job = jobs[j].get();
+        try {
+          OCC_CATCH_SIGNALS
+          if (!CopyFace(job)) {
+            job->failure = "located sub-shapes";
+            return;
+          }
+          FixFace(job);
+          job->failure = CheckMergeable(job, shared[job->item_index]);
+        } catch (...) {
+          job->failure = "an exception";
+        }
+      },
+      Partition::kOnePerTask);
+  stats.face_seconds = seconds();
+  if (stopped) return stats;
+  std::atomic<int> parallel{0};
+  std::mutex refused_mutex;
+  runner.For(
+      0, static_cast<int>(items.size()),
+      [&](int i) {
+        BrepItem* item = items[i];
+        bool mergeable = !item_jobs[i].empty();
+        for (FaceJob* job : item_jobs[i]) {
+          if (job->failure == nullptr) continue;
+          mergeable = false;
+          std::lock_guard<std::mutex> lock(refused_mutex);
+          if (stats.refused.empty()) stats.refused = job->failure;
+          break;
+        }
+        if (mergeable) {
+          try {
+            OCC_CATCH_SIGNALS
+            Merger merger(item_jobs[i], shared[i]);
+            TopoDS_Shape merged = merger.Rebuild(item->raw);
+            FinishItem(item, merged, merger.faces(), merger.RawToMerged());
+            ++parallel;
+            return;
+          } catch (...) {
+          }
+        }
+        HealItem(item);
+      },
+      Partition::kOnePerTask);
+  stats.finish_seconds = seconds();
+  stats.items_face_parallel = parallel.load();
+  return stats;
 }
 
 }  // namespace rdmesh::step

@@ -10,6 +10,8 @@
 #include <TopoDS_Shape.hxx>
 #include <TopoDS_Wire.hxx>
 #include <cstdint>
+#include <functional>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -48,6 +50,22 @@ void BuildItem(Geometry& geometry, BrepItem* item);
 /// ShapeFix_Shape with the item's precision and maximum tolerance, same-parameter fixing off in
 /// the wire tool, no open solids. Thread-safe for items that share no TShapes or Geom objects.
 void HealItem(BrepItem* item);
+
+/// Heals every item as HealItem does, the faces of all items in parallel: each face is fixed
+/// by ShapeFix_Face (as ShapeFix_Shell would) on private copies of its edges and vertices; where
+/// that changed nothing but pcurves, ranges, tolerances and flags, the copies are merged back
+/// into shared edges and the shell, solid, same-parameter and vertex tolerance stages of
+/// ShapeFix_Shape run on the result. An item whose faces' fixing changed more (an edge removed,
+/// split or added, a wire reordered or reversed) is healed by HealItem instead, as OCCT does.
+/// `stop` is polled between faces.
+struct HealStats {
+  int items_face_parallel = 0;  ///< items healed face by face (the others by HealItem)
+  std::string refused;          ///< why the first other item was not, e.g. "shared edge's curve"
+  double face_seconds = 0;      ///< the parallel face fixing
+  double finish_seconds = 0;    ///< merging, the shell and solid stages, and HealItem fallbacks
+};
+HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
+                    const std::function<bool()>& stop);
 
 /// Initialises, once per process, the OCCT globals BuildItem and HealItem use (the shape
 /// healing algorithm containers, lazily built planes), so HealItem may run in parallel.

@@ -188,7 +188,7 @@ class Translator {
   }
 
   // --- Items
-  void BuildItems();
+  void BuildItems(std::vector<std::pair<std::string, double>>* stage_seconds);
 
   // --- Document (STEPCAFControl_Reader::Transfer)
   void BuildDocument(const std::vector<TopoDS_Shape>& root_shapes, ReadShape* read);
@@ -219,6 +219,8 @@ class Translator {
   std::vector<std::unique_ptr<BrepItem>> items_;
   std::unordered_map<uint64_t, BrepItem*> item_by_id_;
   std::unordered_map<uint64_t, TopoDS_Shape> results_;  // the transfer process's bindings
+
+  HealStats heal_stats_;
 
   // Document state
   TopTools_MapOfShape new_shapes_;
@@ -905,7 +907,8 @@ TopoDS_Shape Translator::TransferItem(uint64_t item_id, uint64_t representation)
 // ---------------------------------------------------------------------------------------------
 // Items
 
-void Translator::BuildItems() {
+void Translator::BuildItems(std::vector<std::pair<std::string, double>>* stage_seconds) {
+  auto stage = Clock::now();
   // Items whose edges share a curve entity share Geom objects, which OCCT's reader healed one
   // after the other: build and heal those in order; heal the others in parallel.
   std::unordered_map<uint64_t, int> curve_users;
@@ -916,6 +919,8 @@ void Translator::BuildItems() {
   }
   bool shared = false;
   for (const auto& [curve, users] : curve_users) shared = shared || users > 1;
+  stage_seconds->emplace_back("build", Since(stage));
+  stage = Clock::now();
   if (shared) {
     // Rebuild in OCCT's order, each item healed before the next is built.
     Geometry fresh(entities_);
@@ -924,26 +929,19 @@ void Translator::BuildItems() {
       BuildItem(fresh, item.get());
       HealItem(item.get());
     }
+    stage_seconds->emplace_back("rebuild and heal in order", Since(stage));
+    heal_stats_.refused = "items share a curve";
     return;
   }
-  std::atomic<bool> stop{false}, failed{false};
-  ParallelRunner(options_.threads)
-      .For(
-          0, static_cast<int>(items_.size()),
-          [&](int i) {
-            if (stop.load() || (context_ != nullptr && context_->ShouldStop())) {
-              stop = true;
-              return;
-            }
-            try {
-              HealItem(items_[i].get());
-            } catch (...) {
-              failed = true;  // not an OCCT failure (HealItem keeps those): out of memory
-            }
-          },
-          Partition::kOnePerTask);
+  std::vector<BrepItem*> items;
+  for (auto& item : items_) items.push_back(item.get());
+  const Context* context = context_;
+  const HealStats stats = HealItems(
+      items, options_.threads, [context] { return context != nullptr && context->ShouldStop(); });
   CheckStop();
-  if (failed) ThrowUnsupported("the healing failed");
+  stage_seconds->emplace_back("heal faces", stats.face_seconds);
+  stage_seconds->emplace_back("heal shells", stats.finish_seconds);
+  heal_stats_ = stats;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1291,9 +1289,7 @@ Translated Translator::Run() {
   for (uint64_t root : roots) TransferProduct(root, /*use_trsf=*/true);
   out.stage_seconds.emplace_back("structure", Since(stage));
 
-  stage = Clock::now();
-  BuildItems();
-  out.stage_seconds.emplace_back("brep", Since(stage));
+  BuildItems(&out.stage_seconds);
 
   stage = Clock::now();
   planning_ = false;
@@ -1312,6 +1308,9 @@ Translated Translator::Run() {
   std::tie(out.read.length_unit, out.read.unit_scale_mm) = EngineUnit(LengthUnitName());
   BuildDocument(root_shapes, &out.read);
   out.stage_seconds.emplace_back("document", Since(stage));
+  out.items = static_cast<int>(items_.size());
+  out.items_healed_by_face = heal_stats_.items_face_parallel;
+  out.heal_note = heal_stats_.refused;
   out.supported = true;
   return out;
 }

@@ -37,8 +37,13 @@ struct Translated {
   /// When unsupported: the first construct not handled, e.g. "#123 OFFSET_CURVE_3D".
   std::string unsupported;
   ReadShape read;
-  /// Wall seconds of each stage, in order ("geometry", "heal", "document", ...).
+  /// Wall seconds of each stage, in order ("index", "structure", "build", "heal faces", ...).
   std::vector<std::pair<std::string, double>> stage_seconds;
+  /// B-rep items (solids, shells) translated, and how many were healed face by face in
+  /// parallel; the others are healed whole, as OCCT heals them (`heal_note` says why, for one).
+  int items = 0;
+  int items_healed_by_face = 0;
+  std::string heal_note;
 };
 
 /// Translates `file`. kParseError naming the entity (e.g. "#12 EDGE_CURVE refers to #40, which
