@@ -147,6 +147,12 @@ bool OutOfMemory(const std::string& text) {
   return false;
 }
 
+// OUTDIR, absolute, without a trailing separator.
+fs::path OutputFolder(const std::string& output_dir) {
+  fs::path path = fs::absolute(output_dir).lexically_normal();
+  return path.has_filename() || path == path.root_path() ? path : path.parent_path();
+}
+
 // An exclusive lock on OUTDIR for this run: two runs would write one manifest.
 class OutputLock {
  public:
@@ -223,7 +229,7 @@ class Batch {
       : flags_(flags),
         inputs_(std::move(inputs)),
         levels_(std::move(levels)),
-        out_(fs::absolute(flags.output_dir).lexically_normal()),
+        out_(OutputFolder(flags.output_dir)),
         extension_("." + flags.format),
         manifest_((out_ / "manifest.jsonl").string()),
         display_(flags.quiet, inputs_.size()) {}
@@ -394,6 +400,7 @@ Json Batch::NewEntry(size_t index, const std::string& sha256, int64_t bytes) con
               {"estimated_deviation", Json()},
               {"seconds", 0.0},
               {"output", Json()},
+              {"reader", Json()},
               {"exit_code", Json()},
               {"signal", Json()},
               {"options", options_}};
@@ -563,6 +570,10 @@ void Batch::Finish(const ChildResult& result) {
     entry["requested_deviation"] = report.value("requested_deviation", Json());
     entry["estimated_deviation"] = report.value("estimated_deviation", Json());
   }
+  if (json.contains("reader") && json["reader"].is_string() && json["reader"] != "")
+    entry["reader"] = json["reader"];
+  else if (report.contains("reader") && report["reader"].is_string() && report["reader"] != "")
+    entry["reader"] = report["reader"];
   // The partial files become the outputs; without a mesh, an older output of this path goes.
   if (keep_output) {
     for (size_t i = 0; i < partials.size() && keep_output; ++i) {
@@ -784,6 +795,9 @@ CLI::App* AddBatchCommand(CLI::App* app, BatchFlags* flags) {
   for (const CLI::Option* option : batch->get_options())
     if (std::find(before.begin(), before.end(), option) == before.end())
       flags->passed_on.push_back(option);
+  batch->get_option("--threads")
+      ->description("Threads of each file's process; 0 = all cores; default: cores / --jobs")
+      ->default_str("");
   batch->get_option("--timeout")
       ->description(
           "Per file, in seconds: the file's process stops itself then, and is killed 0.5 s "

@@ -23,7 +23,9 @@ struct Found {
 fs::path Absolute(const fs::path& path) {
   std::error_code error;
   fs::path absolute = fs::absolute(path, error);
-  return (error ? path : absolute).lexically_normal();
+  fs::path normal = (error ? path : absolute).lexically_normal();
+  // "out/" names the folder "out".
+  return normal.has_filename() || normal == normal.root_path() ? normal : normal.parent_path();
 }
 
 std::string Lower(std::string text) {

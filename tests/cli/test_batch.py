@@ -24,7 +24,7 @@ from test_fuzz_regressions import documented_cases
 GOOD = ["axom_sliced_cylinder.step", "cq_red_cube_blue_cylinder.step", "nist_mbe_pmi_11.stp",
         "pyocc_eight_cyl.stp"]
 FIELDS = ["path", "sha256", "bytes", "status", "reason", "faces", "faces_failed", "triangles",
-          "requested_deviation", "estimated_deviation", "seconds", "output", "exit_code",
+          "requested_deviation", "estimated_deviation", "seconds", "output", "reader", "exit_code",
           "signal", "options"]
 
 FAKE = r'''#!/usr/bin/python3
@@ -160,6 +160,7 @@ def test_tree_manifest_and_exit_code(cli, run, dataset, tmp_path):
         assert entry["triangles"] > 0
         assert 0 < entry["estimated_deviation"] <= entry["requested_deviation"]
         assert entry["exit_code"] == 0 and entry["signal"] is None
+        assert entry["reader"] == info["reader"]  # whichever reader read it
     empty = rel["sub/empty.step"]
     assert empty["status"] == "unreadable" and "empty" in empty["reason"]
     assert empty["output"] is None and empty["triangles"] is None
@@ -229,22 +230,39 @@ def test_resume(cli, data_dir, tmp_path):
     assert code == 0 and summary["meshed"] == 4
 
 
-def test_fuzz_files_get_their_documented_status(cli, data_dir, tmp_path):
-    """Each file of tests/data/fuzz ends as its README documents (the exit code of `rdmesh mesh`
-    becomes a status; a crash is seen directly, since the batch's child does not fork again)."""
+def test_fuzz_files_status_is_what_rdmesh_mesh_does(cli, data_dir, tmp_path):
+    """Each file of tests/data/fuzz (crashes and hangs found by fuzzing, README there) gets the
+    status that a run of `rdmesh mesh` in one process (RDMESH_NO_FORK=1, as the batch's children
+    run) leads to: a signal is a crash, exit 3 unreadable, 4 timed out, 1 or failed faces failed."""
     out = tmp_path / "out"
     code, summary, stderr = batch(cli, data_dir / "fuzz", "-o", out, "--timeout", 2, timeout=300)
     assert code == 1, stderr
     entries = manifest(out)
-    for name, (exit_code, message) in documented_cases(data_dir).items():
+    names = sorted(documented_cases(data_dir))
+    assert sorted(entries) == [str(data_dir / "fuzz" / name) for name in names]
+    for name in names:
         entry = entries[str(data_dir / "fuzz" / name)]
-        if "crashed" in message:
-            assert entry["status"] == "crashed" and entry["signal"], entry
-        elif exit_code == 4:  # stopped by itself (the message), or killed 0.5 s later
+        alone = subprocess.run([str(cli), "mesh", str(data_dir / "fuzz" / name), "-o",
+                                str(tmp_path / "alone.glb"), "--json", "--timeout", "2"],
+                               capture_output=True, text=True, timeout=60,
+                               env=dict(os.environ, RDMESH_NO_FORK="1"))
+        lines = [line for line in alone.stdout.splitlines() if line.strip()]
+        report = json.loads(lines[-1]) if lines else {}
+        if alone.returncode < 0:
+            assert entry["status"] == "crashed", entry
+            assert entry["signal"] == signal.Signals(-alone.returncode).name
+        elif alone.returncode == 4:  # stopped by itself, or killed 0.5 s later
             assert entry["status"] == "timed_out", entry
+        elif alone.returncode == 0 and report["faces_failed"] == 0:
+            assert entry["status"] == "ok", entry
         else:
-            status = {1: "failed", 3: "unreadable"}[exit_code]
-            assert entry["status"] == status and message in entry["reason"], entry
+            status = {0: "failed", 1: "failed", 3: "unreadable"}[alone.returncode]
+            assert entry["status"] == status, entry
+            if "error" in report:
+                assert entry["reason"] == report["error"]["message"]
+            else:
+                assert entry["faces_failed"] == report["faces_failed"] > 0
+                assert entry["triangles"] == report["triangles"]
         assert entry["seconds"] < 30
     assert sum(summary["counts"].values()) == len(entries)
 
