@@ -152,6 +152,67 @@ Status JoinWalks(const Model& model, const EdgeGrid& from_grid, const EdgeWalk& 
                     EdgeName(from.eid) + " and " + EdgeName(to->eid) + buf);
 }
 
+// Joins each walk of a loop to the next (JoinWalks), the last to the first.
+Status JoinLoop(const Model& model, const std::vector<EdgeGrid>& grids, double period_u,
+                double period_v, double slack, Surface& surface, std::vector<EdgeWalk>* walks) {
+  const int m = static_cast<int>(walks->size());
+  for (int i = 0; i < m; ++i) {
+    const int j = (i + 1) % m;
+    Status st = JoinWalks(model, grids[(*walks)[i].eid - 1], (*walks)[i], &(*walks)[j], j == 0,
+                          period_u, period_v, slack, surface);
+    if (!st.ok()) return st;
+  }
+  return Status::Ok();
+}
+
+// Whether a joined loop runs over more than one period of a periodic parameter.
+bool CoversMoreThanAPeriod(const std::vector<EdgeWalk>& walks, double period_u, double period_v) {
+  for (auto [period, axis] : {std::pair(period_u, &Vec2::x), std::pair(period_v, &Vec2::y)}) {
+    if (period <= 0) continue;
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    for (const EdgeWalk& w : walks)
+      for (const Vec2& p : w.uv) lo = std::min(lo, p.*axis), hi = std::max(hi, p.*axis);
+    if (hi - lo > period * (1 + 1e-6)) return true;
+  }
+  return false;
+}
+
+// The area a joined loop encloses in (u,v), signed (counter-clockwise positive).
+double LoopArea(const std::vector<EdgeWalk>& walks) {
+  double area = 0;
+  const Vec2* prev = nullptr;
+  for (const EdgeWalk& w : walks)
+    for (const Vec2& p : w.uv) {
+      if (prev) area += Cross(*prev, p);
+      prev = &p;
+    }
+  if (prev) area += Cross(*prev, walks.front().uv.front());
+  return 0.5 * area;
+}
+
+// A loop that covers its surface more than once, the rest of its turns made of degenerate edges:
+// the pin rings of a KiCad transformer (issue 35) are faces of revolution whose loop runs over two
+// or three turns in u, each real circle over one turn, and edges flagged degenerate (a point in
+// 3D, within vertex tolerances from 2e-7 to 0.9) over the other turns, where the surface is a
+// whole circle. Meshed as they are, the degenerate edges pinch a turn of the ring into a point and
+// every triangle there folds. The loop is the same face once, without those edges, when it still
+// closes (JoinWalks, `unjoined` the walks before any join) over at most one turn and encloses an
+// area (a sphere's two seams without its poles enclose none): then that loop into *walks.
+bool WithoutOverlap(const Model& model, const std::vector<EdgeGrid>& grids,
+                    const std::vector<EdgeWalk>& unjoined, double period_u, double period_v,
+                    double slack, double span, Surface& surface, std::vector<EdgeWalk>* walks) {
+  std::vector<EdgeWalk> kept;
+  for (const EdgeWalk& w : unjoined)
+    if (!grids[w.eid - 1].degenerate || !BRep_Tool::Degenerated(TopoDS::Edge(model.edge(w.eid))))
+      kept.push_back(w);
+  if (kept.empty() || kept.size() == unjoined.size()) return false;
+  if (!JoinLoop(model, grids, period_u, period_v, slack, surface, &kept).ok()) return false;
+  if (CoversMoreThanAPeriod(kept, period_u, period_v)) return false;
+  if (!(std::fabs(LoopArea(kept)) > slack * span)) return false;
+  *walks = std::move(kept);
+  return true;
+}
+
 // The node a vertex takes where loops touch at it (or one loop passes it twice): among the
 // vertex's nodes so far (`nodes`), the one at the same (u,v), or else the nearest within `slack`
 // (pcurves that meet at the vertex only up to rounding: 3e-16 apart where a LED's hole touches
@@ -244,7 +305,6 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
     Status st = WalkWire(wire, grids, &walks);
     if (!st.ok()) return st;
     if (walks.empty()) continue;
-    const int m = static_cast<int>(walks.size());
     // The slack for pcurve ends that meet: 1e-3 of the loop's extent in (u,v), as before any
     // tolerance is looked at.
     double span = 0;
@@ -253,12 +313,12 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
         span =
             std::max({span, std::fabs(p.x - walks[0].uv[0].x), std::fabs(p.y - walks[0].uv[0].y)});
     const double slack = 1e-3 * std::max(span, 1e-12) + 1e-9;
-    for (int i = 0; i < m; ++i) {
-      const int j = (i + 1) % m;
-      st = JoinWalks(model, grids[walks[i].eid - 1], walks[i], &walks[j], j == 0, period_u,
-                     period_v, slack, surface);
-      if (!st.ok()) return st;
-    }
+    const std::vector<EdgeWalk> unjoined = walks;
+    st = JoinLoop(model, grids, period_u, period_v, slack, surface, &walks);
+    if (!st.ok()) return st;
+    if (CoversMoreThanAPeriod(walks, period_u, period_v))
+      WithoutOverlap(model, grids, unjoined, period_u, period_v, slack, span, surface, &walks);
+    const int m = static_cast<int>(walks.size());
     // Nodes: every grid point but each walk's last, which is the next walk's first.
     std::vector<int> loop;
     std::vector<int> seg_edge, seg_index;

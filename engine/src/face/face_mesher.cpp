@@ -14,6 +14,7 @@
 
 #include "boundary/face_domain.h"
 #include "face/cdt.h"
+#include "face/first_triangulation.h"
 #include "face/lattice_seeds.h"
 #include "face/refine.h"
 #include "face/refine_constants.h"
@@ -222,39 +223,17 @@ class FaceRun {
 
   // The constrained triangulation of boundary and seeds in scaled (u,v), as a working mesh.
   bool Triangulate() {
-    std::vector<Vec2> points;
-    for (const Vec2& p : domain_.uv)
-      points.push_back({p.x * domain_.scale_u, p.y * domain_.scale_v});
-    for (const Vec2& p : seeds_) points.push_back({p.x * domain_.scale_u, p.y * domain_.scale_v});
-    CdtResult cdt;
-    Status st = ConstrainedTriangulation(points, domain_.segments, context_, &cdt);
+    Status st = TriangulateDomain(domain_, seeds_, *surface_, context_, &mesh_);
     if (Stopping()) return Stop();
     if (!st.ok()) return Fail(st.message());
-    // A face of 10^5 boundary nodes (absurd options) spends seconds here under a sanitizer:
-    // poll every few thousand nodes.
-    auto stop_every = [this](size_t i) { return (i & 4095) == 4095 && Stopping(); };
-    for (size_t i = 0; i < domain_.uv.size(); ++i) {
-      const Vec2& q = domain_.uv[i];
-      mesh_.AddNode(q, domain_.xyz[i], surface_->Normal(q.x, q.y), true, domain_.ref[i]);
-      if (stop_every(i)) return Stop();
-    }
-    for (size_t i = 0; i < seeds_.size(); ++i) {
-      const Vec2& q = seeds_[i];
-      mesh_.AddNode(q, surface_->Point(q.x, q.y), surface_->Normal(q.x, q.y), false, NodeRef{});
-      if (stop_every(i)) return Stop();
-    }
-    std::vector<std::array<int, 2>> splittable;
-    for (size_t s = 0; s < domain_.segments.size(); ++s)
-      if (domain_.segment_splittable[s]) splittable.push_back(domain_.segments[s]);
-    InitWorkMesh(cdt.triangles, cdt.constrained, splittable, &mesh_);
-    if (Stopping()) return Stop();
     return true;
   }
 
   // A first triangulation that folds is unfolded first (flips, and bisections where flips are
   // not enough), then refined; where that stays stuck over the criteria, the triangulation as it
-  // was is refined too, under a cap, and the better result kept; a stuck result is then refined
-  // again from itself while that helps. A run stop leaves the face skipped.
+  // was is refined too, under a cap, and the better result kept; still stuck, so is one whose
+  // triangles follow the surface's turn; a stuck result is then refined again from itself while
+  // that helps. A run stop leaves the face skipped.
   bool Refine() {
     WorkMesh folded = mesh_;
     const bool unfolded =
@@ -265,6 +244,22 @@ class FaceRun {
       const int64_t cap = kFoldedStartCap * std::max(stats_.refined_triangles, kFoldedStartMin);
       // A tie goes to the folded start: its own refinement is as good a mesh.
       KeepIfBetter(&folded, settle_rounds_, std::min(job_.max_triangles, cap), true);
+    }
+    // Before refining a stuck mesh again from itself (which can multiply its triangles without
+    // getting anywhere): a first triangulation that follows the surface's turn.
+    if (Stuck()) {
+      WorkMesh start;
+      const size_t max_seeds =
+          std::max<size_t>(kTurnStartMinSeeds, kTurnStartSeedFactor * domain_.uv.size());
+      status_ = TurnLimitedTriangulation(domain_, seeds_, *surface_, job_.criteria.min_normal_cos,
+                                         kTurnStartMaxTurn, kTurnStartRounds, max_seeds, context_,
+                                         &start);
+      if (status_.ok()) {
+        UnfoldInitialMesh(&start, *surface_, domain_.scale_u, domain_.scale_v);
+        KeepIfBetter(&start, 0, job_.max_triangles, false);
+      } else if (!Stopping()) {
+        status_ = Status::Ok();  // the triangulation that worked before stands
+      }
     }
     // A fresh refiner counts every triangle as a first generation, whose splits may fold
     // children (kFoldingGenerations), which frees splits that the fold guard blocked.

@@ -1,6 +1,7 @@
 #pragma once
 // The face refinement's tuning constants, one line each: the rule and why. What was measured to
 // choose them, and what was tried instead, is in docs/TUNING.md.
+#include <cstddef>
 #include <cstdint>
 
 namespace rdmesh {
@@ -55,5 +56,12 @@ constexpr int64_t kFoldedStartCap = 4;
 constexpr int64_t kFoldedStartMin = 100;
 // A sphere's seed lattice is settled by this many rounds of flips and smoothing before refining.
 constexpr int kLatticeSettleRounds = 4;
+// A face still stuck is refined once more from a first triangulation whose triangles turn by at
+// most this much between corner normals (as SeedPoints' cells, give or take), seeded in at most
+// this many rounds, with at most this many seeds per boundary node (at least the minimum).
+constexpr double kTurnStartMaxTurn = 0.7853981633974483;  // pi / 4
+constexpr int kTurnStartRounds = 12;
+constexpr size_t kTurnStartSeedFactor = 20;
+constexpr size_t kTurnStartMinSeeds = 2000;
 
 }  // namespace rdmesh

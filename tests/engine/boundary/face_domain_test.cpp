@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <BRepAdaptor_Surface.hxx>
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
@@ -15,6 +16,7 @@
 #include <BRepBuilderAPI_MakeWire.hxx>
 #include <BRepPrimAPI_MakeRevol.hxx>
 #include <BRepTools.hxx>
+#include <BRepTools_ReShape.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <GC_MakeArcOfCircle.hxx>
@@ -22,10 +24,13 @@
 #include <Geom2dAPI_Interpolate.hxx>
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_Line.hxx>
+#include <GeomConvert.hxx>
 #include <GeomConvert_CompCurveToBSplineCurve.hxx>
 #include <Geom_BSplineCurve.hxx>
+#include <Geom_Circle.hxx>
 #include <Geom_Line.hxx>
 #include <Geom_SphericalSurface.hxx>
+#include <Geom_TrimmedCurve.hxx>
 #include <TColStd_HArray1OfReal.hxx>
 #include <TColgp_HArray1OfPnt2d.hxx>
 #include <TopExp.hxx>
@@ -41,6 +46,8 @@
 #include <gp_Ax3.hxx>
 #include <gp_Circ.hxx>
 #include <gp_Pln.hxx>
+#include <gp_Vec2d.hxx>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -440,6 +447,130 @@ TEST(FaceDomainTest, LoopsThatTouchAlongShortEdgesLeaveThemOut) {
   EXPECT_EQ(faces[0].status, FaceStatus::kOk) << faces[0].reason;
   const double exact = 6 - M_PI * 0.25;
   EXPECT_NEAR(MeshArea(faces[0]), exact, 0.01 * exact);
+}
+
+// A degenerate edge along (u,v) from `from` by `du` at vertex `v` (one point in 3D), on `surface`.
+TopoDS_Edge DegenerateEdge(const Handle(Geom_Surface) & surface, gp_Pnt2d from, double du,
+                           const TopoDS_Vertex& v) {
+  BRep_Builder builder;
+  TopoDS_Edge edge;
+  builder.MakeEdge(edge);
+  builder.UpdateEdge(edge, new Geom2d_Line(from, gp_Dir2d(du > 0 ? 1 : -1, 0)), surface,
+                     TopLoc_Location(), 1e-7);
+  builder.Degenerated(edge, Standard_True);
+  builder.Add(edge, v.Oriented(TopAbs_FORWARD));
+  builder.Add(edge, v.Oriented(TopAbs_REVERSED));
+  builder.Range(edge, 0, std::fabs(du));
+  return edge;
+}
+
+// A fillet ring (a quarter circle of radius 0.5, 2 from the axis, revolved; its arc a B-spline,
+// so the face is a surface of revolution) whose face runs over two turns in u, as the pin rings
+// of a KiCad transformer do (issue 35): u from 2 pi down to 0 along a degenerate edge at the
+// outer rim's vertex, on to -2 pi along the outer circle, down the seam at -2 pi, from -2 pi to 0
+// along a degenerate edge at the inner rim's vertex, on to 2 pi along the inner circle, and up
+// the seam at 2 pi.
+TopoDS_Shape RingOverTwoTurns() {
+  const gp_Pnt centre(2, 0, 0);
+  Handle(Geom_BSplineCurve) arc = GeomConvert::CurveToBSplineCurve(
+      new Geom_TrimmedCurve(new Geom_Circle(gp_Ax2(centre, gp::DY()), 0.5), 0, M_PI / 2));
+  const TopoDS_Wire profile = BRepBuilderAPI_MakeWire(
+      BRepBuilderAPI_MakeEdge(arc), BRepBuilderAPI_MakeEdge(arc->EndPoint(), centre),
+      BRepBuilderAPI_MakeEdge(centre, arc->StartPoint()));
+  const TopoDS_Shape ring =
+      BRepPrimAPI_MakeRevol(BRepBuilderAPI_MakeFace(profile).Face(), gp_Ax1(gp::Origin(), gp::DZ()))
+          .Shape();
+  TopoDS_Face side;
+  for (TopExp_Explorer fx(ring, TopAbs_FACE); fx.More(); fx.Next())
+    if (BRepAdaptor_Surface(TopoDS::Face(fx.Current())).GetType() == GeomAbs_SurfaceOfRevolution)
+      side = TopoDS::Face(fx.Current());
+  const TopoDS_Face old = TopoDS::Face(side.Oriented(TopAbs_FORWARD));
+  TopLoc_Location location;
+  const Handle(Geom_Surface) surface = BRep_Tool::Surface(old, location);
+  BRep_Builder builder;
+  TopoDS_Face face;
+  builder.MakeFace(face, surface, location, 1e-7);
+  TopoDS_Edge seam, outer, inner;
+  for (TopExp_Explorer ex(old, TopAbs_EDGE); ex.More(); ex.Next()) {
+    const TopoDS_Edge& e = TopoDS::Edge(ex.Current());
+    double first, last;
+    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, old, first, last);
+    if (BRep_Tool::IsClosed(e, old))
+      seam = e;
+    else if (pcurve->Value(first).Y() > 1)
+      outer = e;  // v = pi / 2: the arc's start (2.5, 0, 0) turned
+    else
+      inner = e;
+  }
+  auto pcurve = [&](const TopoDS_Edge& e, TopAbs_Orientation o) {
+    double first, last;
+    return BRep_Tool::CurveOnSurface(TopoDS::Edge(e.Oriented(o)), old, first, last);
+  };
+  const gp_Vec2d turn_back(-2 * M_PI, 0);
+  // The seam's side at u = 0 and the outer circle move a turn down.
+  Handle(Geom2d_Curve) at_zero = pcurve(seam, TopAbs_REVERSED),
+                       at_two_pi = pcurve(seam, TopAbs_FORWARD);
+  builder.UpdateEdge(seam, at_two_pi,
+                     Handle(Geom2d_Curve)::DownCast(at_zero->Translated(turn_back)), face, 1e-7);
+  builder.UpdateEdge(
+      outer, Handle(Geom2d_Curve)::DownCast(pcurve(outer, TopAbs_FORWARD)->Translated(turn_back)),
+      face, 1e-7);
+  builder.UpdateEdge(inner, pcurve(inner, TopAbs_FORWARD), face, 1e-7);
+  TopoDS_Vertex outer_vertex, inner_vertex, unused;
+  TopExp::Vertices(outer, outer_vertex, unused);
+  TopExp::Vertices(inner, inner_vertex, unused);
+  TopAbs_Orientation outer_o = TopAbs_FORWARD, inner_o = TopAbs_FORWARD;
+  for (TopExp_Explorer ex(old, TopAbs_EDGE); ex.More(); ex.Next()) {
+    if (ex.Current().IsSame(outer)) outer_o = ex.Current().Orientation();
+    if (ex.Current().IsSame(inner)) inner_o = ex.Current().Orientation();
+  }
+  TopoDS_Wire wire;
+  builder.MakeWire(wire);
+  builder.Add(wire, DegenerateEdge(surface, gp_Pnt2d(2 * M_PI, M_PI / 2), -2 * M_PI, outer_vertex));
+  builder.Add(wire, outer.Oriented(outer_o));
+  builder.Add(wire, seam.Oriented(TopAbs_REVERSED));
+  builder.Add(wire, DegenerateEdge(surface, gp_Pnt2d(-2 * M_PI, 0), 2 * M_PI, inner_vertex));
+  builder.Add(wire, inner.Oriented(inner_o));
+  builder.Add(wire, seam.Oriented(TopAbs_FORWARD));
+  builder.Add(face, wire);
+  Handle(BRepTools_ReShape) reshape = new BRepTools_ReShape;
+  reshape->Replace(side, face.Oriented(side.Orientation()));
+  return reshape->Apply(ring);
+}
+
+TEST(FaceDomainTest, ALoopOverTwoTurnsIsMeshedOnceWithoutItsDegenerateEdges) {
+  auto model = LoadShape(RingOverTwoTurns(), "ring_over_two_turns");
+  ASSERT_TRUE(model);
+  int ring = 0;
+  for (int f = 1; f <= model->face_count(); ++f)
+    if (BRepAdaptor_Surface(model->face(f)).GetType() == GeomAbs_SurfaceOfRevolution) ring = f;
+  ASSERT_GT(ring, 0);
+  double u0, u1, v0, v1;
+  BRepTools::UVBounds(model->face(ring), u0, u1, v0, v1);
+  EXPECT_NEAR(u1 - u0, 4 * M_PI, 1e-9) << "the face's pcurves run over two turns";
+  const std::vector<EdgeGrid> grids = Grids(*model, 0.01);
+  FaceDomain domain;
+  ASSERT_TRUE(Domain(*model, ring, grids, &domain).ok());
+  EXPECT_LE(domain.umax - domain.umin, 2 * M_PI + 1e-9);
+  for (int e : domain.segment_edge) EXPECT_FALSE(grids[e - 1].degenerate) << "edge " << e;
+  EXPECT_TRUE(FindConflicts(domain).empty());
+  auto result = MeshModel(*model, MeshOptions());
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  const double deviation = 1e-3 * GetModelInfo(*model).diagonal;
+  for (const FaceMesh& f : result->faces) {
+    EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+    EXPECT_EQ(f.reason, "") << "face " << f.face_id;
+    EXPECT_LE(f.max_deviation, deviation * (1 + 1e-9)) << "face " << f.face_id;
+  }
+  // Pappus: the arc's length times the turn of its centroid, 2 + 1 / pi from the axis.
+  const double once = (M_PI / 4) * 2 * M_PI * (2 + 1 / M_PI);
+  EXPECT_NEAR(result->faces[ring - 1].area, once, 0.01 * once);
+  std::map<std::pair<int, int>, int> uses;
+  const std::vector<int32_t>& t = result->mesh.triangles;
+  for (size_t k = 0; k < t.size(); k += 3)
+    for (int i = 0; i < 3; ++i)
+      ++uses[{std::min(t[k + i], t[k + (i + 1) % 3]), std::max(t[k + i], t[k + (i + 1) % 3])}];
+  for (const auto& [edge, n] : uses) EXPECT_EQ(n, 2);
 }
 
 }  // namespace
