@@ -43,8 +43,8 @@ std::string LabelName(const TDF_Label& label) {
 
 std::string ColorText(const Handle(XCAFDoc_ColorTool) & colors, const TDF_Label& label) {
   std::string text;
-  static const char* const kTypes[] = {"", "generic", "surface", "curve"};
-  for (int type = 1; type <= 3; ++type) {
+  static const char* const kTypes[] = {"generic", "surface", "curve"};  // XCAFDoc_ColorType
+  for (int type = 0; type <= 2; ++type) {
     Quantity_ColorRGBA color;
     if (!colors->GetColor(label, static_cast<XCAFDoc_ColorType>(type), color)) continue;
     char buffer[96];
