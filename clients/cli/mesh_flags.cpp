@@ -52,7 +52,7 @@ void AddMeshFlags(CLI::App* app, MeshFlags* flags) {
       ->capture_default_str()
       ->group("Meshing");
   flags->deviation_rel_flag =
-      app->add_option("--max-deviation-rel", o.max_deviation_rel,
+      app->add_option("--max-deviation-rel", flags->max_deviation_rel,
                       "Largest distance as a fraction of the bounding-box diagonal (used when "
                       "--max-deviation is 0)")
           ->capture_default_str()
@@ -134,6 +134,8 @@ Result<std::vector<int>> ParseFaceList(const std::string& text) {
 
 Result<MeshOptions> BuildMeshOptions(const MeshFlags& flags) {
   MeshOptions options = flags.options;
+  if (flags.deviation_rel_flag != nullptr && flags.deviation_rel_flag->count() > 0)
+    options.max_deviation_rel = flags.max_deviation_rel;
   if (!flags.faces.empty()) {
     Result<std::vector<int>> ids = ParseFaceList(flags.faces);
     if (!ids.ok()) return ids.status();
@@ -146,9 +148,6 @@ Result<MeshOptions> BuildMeshOptions(const MeshFlags& flags) {
 
 Result<std::vector<double>> BuildLevels(const MeshFlags& flags, const MeshOptions& options) {
   if (flags.lod.empty()) return std::vector<double>();
-  if (flags.deviation_rel_flag != nullptr && flags.deviation_rel_flag->count() > 0)
-    return Status(StatusCode::kInvalidArgument,
-                  "--lod sets the relative deviation of each level: leave out --max-deviation-rel");
   std::vector<double> levels;
   std::stringstream items(flags.lod);
   std::string item;

@@ -14,7 +14,9 @@ namespace rdmesh::cli {
 
 /// Raw flag values as parsed; defaults are MeshOptions' defaults.
 struct MeshFlags {
-  MeshOptions options;
+  MeshOptions options;  ///< max_deviation_rel stays unset: it comes from the flag below
+  /// --max-deviation-rel; MeshOptions::max_deviation_rel only when the flag is given.
+  double max_deviation_rel = kDefaultMaxDeviationRel;
   std::string faces;   ///< "1,5,7" or ranges "2-9"; empty = all faces
   WriteOptions write;  ///< how the output file is written
   std::string lod;     ///< --lod: relative deviations "1e-2,1e-3,1e-4"; empty = one mesh
@@ -31,13 +33,13 @@ void AddMeshFlags(CLI::App* app, MeshFlags* flags);
 /// kInvalidArgument with the offending item on a bad list.
 Result<std::vector<int>> ParseFaceList(const std::string& text);
 
-/// The MeshOptions the flags ask for, checked with ValidateOptions; kInvalidArgument with a
-/// readable message otherwise.
+/// The MeshOptions the flags ask for (max_deviation_rel set only by --max-deviation-rel), checked
+/// with ValidateOptions; kInvalidArgument with a readable message otherwise.
 Result<MeshOptions> BuildMeshOptions(const MeshFlags& flags);
 
 /// The levels of detail --lod asks for (ResolveLevels: coarsest first), empty without --lod.
-/// kInvalidArgument for a bad list, or --lod with --max-deviation-rel, --max-deviation or
-/// --max-triangles.
+/// kInvalidArgument for a bad list, or (ResolveLevels' refusal) --lod with --max-deviation-rel,
+/// --max-deviation or --max-triangles.
 Result<std::vector<double>> BuildLevels(const MeshFlags& flags, const MeshOptions& options);
 
 /// Where level `level` of a --lod run is written: OUT.EXT -> OUT.lodN.EXT (N = 0 the coarsest).

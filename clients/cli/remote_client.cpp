@@ -230,8 +230,7 @@ Result<std::vector<MeshResult>> MeshRemoteLevels(const std::string& address,
   request.mutable_return_fields()->set_edges(true);  // the edge lines, as a local run has them
   request.mutable_return_fields()->set_triangle_deviation(true);  // VTU and PLY cell data
   if (!levels_rel.empty()) {
-    // The levels replace the relative deviation, which the request leaves unset then.
-    request.mutable_options()->clear_max_deviation_rel();
+    // The levels replace the relative deviation, which ResolveLevels has left unset.
     for (double level : levels_rel) request.add_lod_deviation_rel(level);
   }
   bool not_found = false;

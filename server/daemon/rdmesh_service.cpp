@@ -329,29 +329,25 @@ void RdmeshService::ReturnWorker(std::unique_ptr<WorkerProcess> worker, const Ca
 }
 
 Result<RdmeshService::MeshPlan> RdmeshService::PlanMesh(const pb::MeshRequest& request) const {
-  Result<MeshOptions> options = FromProto(request.options());
-  if (!options.ok()) return options.status();
-  if (Status valid = ValidateOptions(*options); !valid.ok()) return valid;
   MeshPlan plan;
+  plan.options = FromProto(request.options());
+  if (Status valid = ValidateOptions(plan.options); !valid.ok()) return valid;
   if (request.lod_deviation_rel_size() > 0) {
-    if (request.options().has_max_deviation_rel()) {
-      return Status(StatusCode::kInvalidArgument,
-                    "lod_deviation_rel replaces max_deviation_rel: leave max_deviation_rel unset");
-    }
+    // ResolveLevels refuses a set max_deviation_rel, as it does for `rdmesh mesh --lod`.
     Result<std::vector<double>> levels = ResolveLevels(
-        {request.lod_deviation_rel().begin(), request.lod_deviation_rel().end()}, *options);
+        {request.lod_deviation_rel().begin(), request.lod_deviation_rel().end()}, plan.options);
     if (!levels.ok()) return levels.status();
     plan.levels = std::move(*levels);
   }
-  if (config_.max_triangles > 0 && options->max_triangles > config_.max_triangles) {
+  MeshOptions& options = plan.options;
+  if (config_.max_triangles > 0 && options.max_triangles > config_.max_triangles) {
     return Status(StatusCode::kInvalidArgument, "max_triangles " +
-                                                    std::to_string(options->max_triangles) +
+                                                    std::to_string(options.max_triangles) +
                                                     " is more than the server's limit of " +
                                                     std::to_string(config_.max_triangles));
   }
-  options->threads =
-      options->threads > 0 ? std::min(options->threads, resolved_threads_) : resolved_threads_;
-  plan.options = std::move(*options);
+  options.threads =
+      options.threads > 0 ? std::min(options.threads, resolved_threads_) : resolved_threads_;
   return plan;
 }
 
@@ -388,9 +384,10 @@ pb::MeshEvent RdmeshService::StartedEvent(const MeshPlan& plan, const StoredMode
       plan.levels.empty() ? options : LevelOptions(options, plan.levels.back());
   pb::ResolvedOptions* resolved = started->mutable_options();
   *resolved->mutable_options() = ToProto(shown);
+  resolved->mutable_options()->set_max_deviation_rel(MaxDeviationRel(shown));  // the one used
   resolved->set_max_deviation_abs(shown.max_deviation > 0
                                       ? shown.max_deviation
-                                      : shown.max_deviation_rel * model.info.diagonal());
+                                      : MaxDeviationRel(shown) * model.info.diagonal());
   resolved->set_threads(options.threads);
   resolved->set_server_max_triangles(config_.max_triangles);
   started->set_faces_requested(

@@ -1,7 +1,6 @@
 #include "wire/convert.h"
 
 #include <algorithm>
-#include <cmath>
 #include <limits>
 #include <string>
 #include <utility>
@@ -10,15 +9,6 @@ namespace rdmesh::server {
 namespace {
 
 Status Invalid(const std::string& message) { return Status(StatusCode::kInvalidArgument, message); }
-
-/// Non-negative finite, or a readable error naming the field.
-Status CheckLength(const char* name, double value) {
-  if (!std::isfinite(value)) return Invalid(std::string(name) + " must be a finite number");
-  if (value < 0.0) {
-    return Invalid(std::string(name) + " must be >= 0 (got " + std::to_string(value) + ")");
-  }
-  return Status::Ok();
-}
 
 template <typename T, typename Field>
 void AppendRange(const std::vector<T>& from, int64_t begin, int64_t end, Field* to) {
@@ -33,21 +23,8 @@ void AppendField(const Field& from, std::vector<T>* to) {
 
 }  // namespace
 
-Result<MeshOptions> FromProto(const pb::MeshOptions& in) {
+MeshOptions FromProto(const pb::MeshOptions& in) {
   MeshOptions out;
-  for (const auto& [name, value] :
-       {std::pair<const char*, double>{"max_deviation", in.max_deviation()},
-        {"max_deviation_rel", in.has_max_deviation_rel() ? in.max_deviation_rel() : 0.0},
-        {"rd_tolerance", in.rd_tolerance()},
-        {"min_edge_length", in.min_edge_length()},
-        {"max_edge_length", in.max_edge_length()},
-        {"timeout_seconds", in.timeout_seconds()},
-        {"sharp_edge_angle", in.has_sharp_edge_angle() ? in.sharp_edge_angle() : 0.0}}) {
-    Status status = CheckLength(name, value);
-    if (!status.ok()) return status;
-  }
-  if (in.max_triangles() < 0) return Invalid("max_triangles must be >= 0 (0 = no budget)");
-  if (in.threads() < 0) return Invalid("threads must be >= 0 (0 = the server's default)");
   out.max_deviation = in.max_deviation();
   if (in.has_max_deviation_rel()) out.max_deviation_rel = in.max_deviation_rel();
   out.rd_tolerance = in.rd_tolerance();
@@ -58,17 +35,14 @@ Result<MeshOptions> FromProto(const pb::MeshOptions& in) {
   out.threads = in.threads();
   out.timeout_seconds = in.timeout_seconds();
   if (in.has_sharp_edge_angle()) out.sharp_edge_angle = in.sharp_edge_angle();
-  for (int id : in.face_ids()) {
-    if (id < 1) return Invalid("face_ids are 1-based (got " + std::to_string(id) + ")");
-    out.face_ids.push_back(id);
-  }
+  out.face_ids.assign(in.face_ids().begin(), in.face_ids().end());
   return out;
 }
 
 pb::MeshOptions ToProto(const MeshOptions& in) {
   pb::MeshOptions out;
   out.set_max_deviation(in.max_deviation);
-  out.set_max_deviation_rel(in.max_deviation_rel);
+  if (in.max_deviation_rel) out.set_max_deviation_rel(*in.max_deviation_rel);
   out.set_rd_tolerance(in.rd_tolerance);
   out.set_max_triangles(in.max_triangles);
   out.set_min_edge_length(in.min_edge_length);

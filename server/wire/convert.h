@@ -21,11 +21,10 @@ namespace pb = ::rdmesh::v1;
 /// Largest serialized size of one FaceMesh event, in bytes. Faces larger than this are split.
 inline constexpr std::size_t kMaxFaceMessageBytes = 1u << 20;
 
-/// Engine options from a request. Unset fields keep the engine's defaults. kInvalidArgument with
-/// a readable message for values no run accepts (NaN, infinite or negative lengths, negative
-/// counts); the engine's ValidateOptions then checks ranges and combinations.
-Result<MeshOptions> FromProto(const pb::MeshOptions& in);
-/// The request form of engine options (max_deviation_rel is always set).
+/// Engine options from a request, as they are: unset fields keep the engine's defaults (an unset
+/// max_deviation_rel stays unset). The engine's ValidateOptions checks them.
+MeshOptions FromProto(const pb::MeshOptions& in);
+/// The request form of engine options; max_deviation_rel only when set.
 pb::MeshOptions ToProto(const MeshOptions& in);
 
 /// Model description; `model_id`, `file_bytes`, `cached` and `load_seconds` are the caller's.

@@ -196,11 +196,9 @@ class Worker {
 
     *phase = "mesh";
     const wire::MeshCall& mesh = call.mesh();
-    Result<MeshOptions> options = FromProto(mesh.options());
-    if (!options.ok()) return options.status();
     MeshJob::Params params;
     params.model = *entry;
-    params.options = std::move(*options);
+    params.options = FromProto(mesh.options());
     params.with_uv = mesh.return_fields().uv();
     params.with_normals = mesh.return_fields().normals();
     params.with_topology = mesh.return_fields().node_topology();

@@ -43,7 +43,8 @@ inline constexpr int kMaxLevels = 8;
 /// as MeshOptions::max_deviation_rel), in any order: sorted coarsest first (level 0 = the largest
 /// deviation). kInvalidArgument when there are none, more than kMaxLevels, two equal ones, one
 /// out of max_deviation_rel's range or > 0 smaller than 1e-7, or when `options` asks for an
-/// absolute max_deviation or a max_triangles budget (each level is a relative deviation).
+/// absolute max_deviation, sets max_deviation_rel or asks for a max_triangles budget (each level
+/// is a relative deviation). The one check of `rdmesh mesh --lod` and of lod_deviation_rel.
 Result<std::vector<double>> ResolveLevels(std::vector<double> levels_rel,
                                           const MeshOptions& options);
 

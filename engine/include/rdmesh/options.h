@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "rdmesh/mesh.h"
@@ -8,14 +9,19 @@
 
 namespace rdmesh {
 
+/// MeshOptions::max_deviation_rel when it is not set.
+inline constexpr double kDefaultMaxDeviationRel = 1e-3;
+
 /// What a meshing run should reach. A plain struct: every field has a usable default.
 /// Lengths are in model units (OCCT reads STEP in millimetres).
 struct MeshOptions {
   /// Largest distance between mesh and surface, in model units. 0 = use max_deviation_rel.
   double max_deviation = 0.0;
   /// Largest distance as a fraction of the model's bounding-box diagonal. Used when
-  /// max_deviation is 0. 0 (with max_deviation 0) = no deviation criterion.
-  double max_deviation_rel = 1e-3;
+  /// max_deviation is 0. 0 (with max_deviation 0) = no deviation criterion. Unset =
+  /// kDefaultMaxDeviationRel (MaxDeviationRel reads it); a run with levels of detail refuses a
+  /// set one, since each level sets its own (ResolveLevels).
+  std::optional<double> max_deviation_rel;
   /// Representation-deficit tolerance (scale free; RD of a segment turning by theta ~ theta^2/24).
   /// 0 = off.
   double rd_tolerance = 0.0;
@@ -41,7 +47,14 @@ struct MeshOptions {
   double sharp_edge_angle = kDefaultSharpEdgeAngle;
 };
 
-/// Checks ranges and combinations; kInvalidArgument with a readable message when out of range.
+/// The relative deviation a run uses: max_deviation_rel, or its default when unset.
+inline double MaxDeviationRel(const MeshOptions& options) {
+  return options.max_deviation_rel.value_or(kDefaultMaxDeviationRel);
+}
+
+/// Checks ranges and combinations; kInvalidArgument with a readable message, naming the field,
+/// when out of range. The one check of options: the CLI and the service call it before a run,
+/// MeshModel again at its start.
 Status ValidateOptions(const MeshOptions& options);
 
 }  // namespace rdmesh

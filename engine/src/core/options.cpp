@@ -11,11 +11,12 @@ bool Finite(double x) { return std::isfinite(x); }
 }  // namespace
 
 Status ValidateOptions(const MeshOptions& o) {
+  const double rel = MaxDeviationRel(o);
   if (!Finite(o.max_deviation) || o.max_deviation < 0)
     return Invalid("max_deviation must be a finite length >= 0 (model units)");
-  if (!Finite(o.max_deviation_rel) || o.max_deviation_rel < 0 || o.max_deviation_rel > 0.5)
+  if (!Finite(rel) || rel < 0 || rel > 0.5)
     return Invalid("max_deviation_rel must lie in [0, 0.5] (fraction of the bbox diagonal)");
-  if (o.max_deviation == 0 && o.max_deviation_rel > 0 && o.max_deviation_rel < 1e-7)
+  if (o.max_deviation == 0 && rel > 0 && rel < 1e-7)
     return Invalid("max_deviation_rel below 1e-7 of the diagonal is finer than the geometry");
   if (!Finite(o.rd_tolerance) || o.rd_tolerance < 0 || o.rd_tolerance > 1)
     return Invalid("rd_tolerance must lie in [0, 1]");
@@ -33,9 +34,9 @@ Status ValidateOptions(const MeshOptions& o) {
   if (!Finite(o.sharp_edge_angle) || o.sharp_edge_angle < 0 || o.sharp_edge_angle > 180)
     return Invalid("sharp_edge_angle must lie in [0, 180] degrees");
   for (int id : o.face_ids)
-    if (id < 1) return Invalid("face ids start at 1");
-  if (o.max_deviation == 0 && o.max_deviation_rel == 0 && o.rd_tolerance == 0 &&
-      o.max_edge_length == 0 && o.max_triangles == 0)
+    if (id < 1) return Invalid("face_ids start at 1 (got " + std::to_string(id) + ")");
+  if (o.max_deviation == 0 && rel == 0 && o.rd_tolerance == 0 && o.max_edge_length == 0 &&
+      o.max_triangles == 0)
     return Invalid(
         "no stop criterion: set a max deviation, an RD tolerance, a max edge length "
         "or a triangle budget");

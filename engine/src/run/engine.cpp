@@ -25,7 +25,7 @@ Result<MeshResult> MeshModelWith(const Model& model, const MeshOptions& options,
   if (!context) context = &local;
   if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
   double deviation = options.max_deviation > 0 ? options.max_deviation
-                                               : options.max_deviation_rel * model.info.diagonal;
+                                               : MaxDeviationRel(options) * model.info.diagonal;
   if (options.max_triangles <= 0)
     return MeshAtDeviation(model, options, deviation, context, surfaces,
                            RunOutput::kMeshAndEdgeLines);

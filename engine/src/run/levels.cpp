@@ -26,6 +26,8 @@ Result<std::vector<double>> ResolveLevels(std::vector<double> levels_rel,
     return Invalid("lod: at most " + std::to_string(kMaxLevels) + " levels");
   if (options.max_deviation > 0)
     return Invalid("lod levels are relative deviations: leave max_deviation at 0");
+  if (options.max_deviation_rel)
+    return Invalid("lod levels are relative deviations: leave max_deviation_rel unset");
   if (options.max_triangles > 0)
     return Invalid("lod levels are deviations: they do not combine with max_triangles");
   for (double level : levels_rel) {

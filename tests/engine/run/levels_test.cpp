@@ -25,6 +25,8 @@ TEST(LevelsTest, ResolveRefusesBadLevels) {
   absolute.max_deviation = 0.1;
   MeshOptions budget;
   budget.max_triangles = 1000;
+  MeshOptions relative;  // even at the default's value: the levels replace it
+  relative.max_deviation_rel = kDefaultMaxDeviationRel;
   const std::vector<std::pair<std::vector<double>, MeshOptions>> bad = {
       {{}, plain},
       {{1e-2, 1e-2}, plain},
@@ -35,12 +37,23 @@ TEST(LevelsTest, ResolveRefusesBadLevels) {
       {{1e-2, 1e-3, 1e-4, 2e-4, 3e-4, 4e-4, 5e-4, 6e-4, 7e-4}, plain},
       {{1e-2}, absolute},
       {{1e-2}, budget},
+      {{1e-2}, relative},
   };
   for (const auto& [levels, options] : bad) {
     auto resolved = ResolveLevels(levels, options);
     EXPECT_FALSE(resolved.ok()) << levels.size() << " levels";
     if (!resolved.ok()) EXPECT_EQ(resolved.status().code(), StatusCode::kInvalidArgument);
   }
+}
+
+TEST(LevelsTest, ResolveNamesTheSetRelativeDeviation) {
+  MeshOptions relative;
+  relative.max_deviation_rel = 1e-3;
+  auto resolved = ResolveLevels({1e-2, 1e-3}, relative);
+  ASSERT_FALSE(resolved.ok());
+  EXPECT_NE(resolved.status().message().find("max_deviation_rel"), std::string::npos)
+      << resolved.status().message();
+  EXPECT_TRUE(ResolveLevels({1e-2, 1e-3}, MeshOptions()).ok());
 }
 
 TEST(LevelsTest, LevelOptionsReplaceOnlyTheDeviation) {

@@ -10,24 +10,26 @@ namespace rdmesh::server {
 namespace {
 
 TEST(ConvertOptionsTest, UnsetFieldsKeepTheEngineDefaults) {
-  Result<MeshOptions> options = FromProto(pb::MeshOptions());
-  ASSERT_TRUE(options.ok()) << options.status().ToString();
+  const MeshOptions options = FromProto(pb::MeshOptions());
   const MeshOptions defaults;
-  EXPECT_EQ(options->max_deviation, defaults.max_deviation);
-  EXPECT_EQ(options->max_deviation_rel, defaults.max_deviation_rel);
-  EXPECT_EQ(options->max_triangles, 0);
-  EXPECT_FALSE(options->nurbs);
-  EXPECT_TRUE(options->face_ids.empty());
+  EXPECT_EQ(options.max_deviation, defaults.max_deviation);
+  EXPECT_EQ(options.max_deviation_rel, defaults.max_deviation_rel);
+  EXPECT_FALSE(options.max_deviation_rel.has_value());  // unset stays unset
+  EXPECT_EQ(MaxDeviationRel(options), kDefaultMaxDeviationRel);
+  EXPECT_EQ(options.max_triangles, 0);
+  EXPECT_FALSE(options.nurbs);
+  EXPECT_TRUE(options.face_ids.empty());
+  EXPECT_FALSE(ToProto(options).has_max_deviation_rel());
 }
 
 TEST(ConvertOptionsTest, ExplicitZeroRelativeDeviationIsKept) {
   pb::MeshOptions in;
   in.set_max_deviation_rel(0.0);
   in.set_rd_tolerance(1e-3);
-  Result<MeshOptions> options = FromProto(in);
-  ASSERT_TRUE(options.ok());
-  EXPECT_EQ(options->max_deviation_rel, 0.0);
-  EXPECT_EQ(options->rd_tolerance, 1e-3);
+  const MeshOptions options = FromProto(in);
+  EXPECT_EQ(options.max_deviation_rel, 0.0);
+  EXPECT_EQ(options.rd_tolerance, 1e-3);
+  EXPECT_TRUE(ValidateOptions(options).ok());
 }
 
 TEST(ConvertOptionsTest, RoundTrip) {
@@ -43,30 +45,31 @@ TEST(ConvertOptionsTest, RoundTrip) {
   in.face_ids = {4, 1, 9};
   in.timeout_seconds = 7.5;
   in.sharp_edge_angle = 45.0;
-  Result<MeshOptions> out = FromProto(ToProto(in));
-  ASSERT_TRUE(out.ok()) << out.status().ToString();
-  EXPECT_EQ(out->max_deviation, in.max_deviation);
-  EXPECT_EQ(out->max_deviation_rel, in.max_deviation_rel);
-  EXPECT_EQ(out->rd_tolerance, in.rd_tolerance);
-  EXPECT_EQ(out->max_triangles, in.max_triangles);
-  EXPECT_EQ(out->min_edge_length, in.min_edge_length);
-  EXPECT_EQ(out->max_edge_length, in.max_edge_length);
-  EXPECT_EQ(out->nurbs, in.nurbs);
-  EXPECT_EQ(out->threads, in.threads);
-  EXPECT_EQ(out->face_ids, in.face_ids);
-  EXPECT_EQ(out->timeout_seconds, in.timeout_seconds);
-  EXPECT_EQ(out->sharp_edge_angle, in.sharp_edge_angle);
-  EXPECT_EQ(FromProto(pb::MeshOptions())->sharp_edge_angle, kDefaultSharpEdgeAngle);
+  const MeshOptions out = FromProto(ToProto(in));
+  EXPECT_EQ(out.max_deviation, in.max_deviation);
+  EXPECT_EQ(out.max_deviation_rel, in.max_deviation_rel);
+  EXPECT_EQ(out.rd_tolerance, in.rd_tolerance);
+  EXPECT_EQ(out.max_triangles, in.max_triangles);
+  EXPECT_EQ(out.min_edge_length, in.min_edge_length);
+  EXPECT_EQ(out.max_edge_length, in.max_edge_length);
+  EXPECT_EQ(out.nurbs, in.nurbs);
+  EXPECT_EQ(out.threads, in.threads);
+  EXPECT_EQ(out.face_ids, in.face_ids);
+  EXPECT_EQ(out.timeout_seconds, in.timeout_seconds);
+  EXPECT_EQ(out.sharp_edge_angle, in.sharp_edge_angle);
+  EXPECT_EQ(FromProto(pb::MeshOptions()).sharp_edge_angle, kDefaultSharpEdgeAngle);
 }
 
-TEST(ConvertOptionsTest, RejectsValuesNoRunAccepts) {
+// FromProto converts; the engine's ValidateOptions, the one check of options, refuses what no
+// run accepts and names the field.
+TEST(ConvertOptionsTest, ValuesNoRunAcceptsAreRefusedByTheEngine) {
   const auto rejects = [](auto set, const std::string& field) {
     pb::MeshOptions in;
     set(&in);
-    Result<MeshOptions> out = FromProto(in);
-    EXPECT_FALSE(out.ok()) << field;
-    EXPECT_EQ(out.status().code(), StatusCode::kInvalidArgument) << field;
-    EXPECT_NE(out.status().message().find(field), std::string::npos) << out.status().message();
+    const Status valid = ValidateOptions(FromProto(in));
+    EXPECT_FALSE(valid.ok()) << field;
+    EXPECT_EQ(valid.code(), StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(valid.message().find(field), std::string::npos) << valid.message();
   };
   rejects([](pb::MeshOptions* o) { o->set_max_deviation(-1); }, "max_deviation");
   rejects([](pb::MeshOptions* o) { o->set_max_deviation(std::nan("")); }, "max_deviation");
