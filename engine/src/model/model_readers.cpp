@@ -332,12 +332,11 @@ Status ParseStep(const std::string& bytes, const std::string& name, XSControl_Re
   return CheckReferences(reader, kStepChecks, name);
 }
 
-// Which STEP reader runs: RDMESH_STEP_READER=rdmesh tries rdmesh's own first (model/step), with
-// OCCT's for what it does not cover; unset or anything else, OCCT's alone. Not the default yet:
-// the own reader's B-reps equal OCCT's (areas to 1e-9) but not yet to the last bit everywhere.
+// Which STEP reader runs: rdmesh's own first (model/step), with OCCT's for what it does not
+// cover; RDMESH_STEP_READER=occt forces OCCT's alone (to compare the two).
 bool OwnStepReader() {
   const char* choice = std::getenv("RDMESH_STEP_READER");
-  return choice != nullptr && std::string(choice) == "rdmesh";
+  return choice == nullptr || std::string(choice) != "occt";
 }
 
 // rdmesh's own STEP reader (model/step): the Part 21 parser, then the translator. Null when the
