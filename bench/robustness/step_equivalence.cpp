@@ -131,6 +131,8 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
     if (!equivalent) line += ", \"difference\": " + Json(comparison.difference);
     if (!comparison.numbering_difference.empty())
       line += ", \"numbering\": " + Json(comparison.numbering_difference);
+    if (!comparison.tolerance_difference.empty())
+      line += ", \"tolerances\": " + Json(comparison.tolerance_difference);
     if (ours->read.length_unit != occt->length_unit ||
         ours->read.unit_scale_mm != occt->unit_scale_mm) {
       equivalent = false;

@@ -135,7 +135,10 @@ ShapeSummary Summarize(const ReadShape& read, int threads) {
   for (int i = 1; i <= vertices.Extent(); ++i) {
     const gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(vertices(i)));
     summary.vertex_points.push_back({p.X(), p.Y(), p.Z()});
+    summary.vertex_tolerances.push_back(BRep_Tool::Tolerance(TopoDS::Vertex(vertices(i))));
   }
+  for (int i = 1; i <= edges.Extent(); ++i)
+    summary.edge_tolerances.push_back(BRep_Tool::Tolerance(TopoDS::Edge(edges(i))));
   for (int i = 1; i <= edges.Extent(); ++i) {
     std::string text;
     for (TopoDS_Iterator it(edges(i), Standard_False); it.More(); it.Next())
@@ -256,6 +259,20 @@ Comparison Compare(const ShapeSummary& ours, const ShapeSummary& theirs, double 
       break;
     }
   }
+  auto tolerances = [&](const char* what, const std::vector<double>& a,
+                        const std::vector<double>& b) {
+    if (!result.tolerance_difference.empty() || a.size() != b.size()) return;
+    for (size_t i = 0; i < a.size(); ++i) {
+      if (a[i] == b[i]) continue;
+      char buffer[128];
+      std::snprintf(buffer, sizeof(buffer), "%s %zu tolerance %.17g vs %.17g", what, i + 1, a[i],
+                    b[i]);
+      result.tolerance_difference = buffer;
+      return;
+    }
+  };
+  tolerances("edge", ours.edge_tolerances, theirs.edge_tolerances);
+  tolerances("vertex", ours.vertex_tolerances, theirs.vertex_tolerances);
   result.equivalent = result.difference.empty();
   return result;
 }

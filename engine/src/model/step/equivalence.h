@@ -20,6 +20,7 @@ struct ShapeSummary {
   /// orientations, so edge and vertex numbering can be compared.
   std::vector<std::string> edge_vertices;
   std::vector<std::array<double, 3>> vertex_points;  ///< per vertex id
+  std::vector<double> edge_tolerances, vertex_tolerances;  ///< per edge and vertex id
   std::array<double, 6> box{};                       ///< BRepBndLib::AddOptimal, without tolerances
   bool has_box = false;
   /// The document as lines: every label under the free shapes with its kind (assembly,
@@ -39,6 +40,8 @@ struct Comparison {
   /// Where vertex numbering or the vertices of edges differ (not part of `equivalent`: the
   /// engine numbers faces and edges, and those are compared), "" when identical.
   std::string numbering_difference;
+  /// Where edge or vertex tolerances differ, "" when identical (not part of `equivalent`).
+  std::string tolerance_difference;
 };
 
 /// Compares two summaries: exact counts, types and document; areas within `area_rel`

@@ -27,6 +27,8 @@
 #include <ShapeBuild_Edge.hxx>
 #include <ShapeBuild_ReShape.hxx>
 #include <ShapeExtend_WireData.hxx>
+#include <ShapeFix.hxx>
+#include <ShapeFix_Edge.hxx>
 #include <ShapeFix_EdgeProjAux.hxx>
 #include <ShapeFix_Face.hxx>
 #include <ShapeFix_Shape.hxx>
@@ -63,6 +65,7 @@
 #include <string>
 
 #include "core/parallel.h"
+#include "model/step/finish.h"
 
 namespace rdmesh::step {
 
@@ -1163,7 +1166,8 @@ class Merger {
 // whose faces are fixed already.
 void FinishItem(BrepItem* item, const TopoDS_Shape& merged,
                 const TopTools_DataMapOfShapeShape& merged_faces,
-                const TopTools_DataMapOfShapeShape& merged_edges_vertices) {
+                const TopTools_DataMapOfShapeShape& merged_edges_vertices,
+                const ParallelRunner& runner) {
   item->healed = merged;
   item->modified.Clear();
   Handle(ShapeFix_Shape) fix = new ShapeFix_Shape;
@@ -1173,8 +1177,19 @@ void FinishItem(BrepItem* item, const TopoDS_Shape& merged,
   fix->FixFaceTool()->FixWireTool()->FixSameParameterMode() = Standard_False;
   fix->FixSolidTool()->CreateOpenSolidMode() = Standard_False;
   fix->FixShellTool()->FixFaceMode() = 0;
+  // ShapeFix_Shape's last two stages run below, their checks in parallel.
+  fix->FixSameParameterMode() = 0;
+  fix->FixVertexTolMode() = 0;
   fix->Perform();
   TopoDS_Shape result = fix->Shape();
+  if (!result.IsNull()) {
+    if (!SameParameterInParallel(result, runner)) ShapeFix::SameParameter(result, Standard_False);
+    // The edge tool works through the shape's context, as after ShapeFix_Face has run.
+    Handle(ShapeFix_Edge) edge_tool = fix->FixEdgeTool();
+    edge_tool->SetContext(fix->Context());
+    FixVertexTolerancesInParallel(result, edge_tool, runner);
+    result = fix->Context()->Apply(result);
+  }
   if (!result.IsNull()) item->healed = result;
   TopTools_DataMapOfShapeShape second;
   if (!result.IsNull() && result != merged) RecordModifications(merged, fix->Context(), &second);
@@ -1270,7 +1285,7 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
             OCC_CATCH_SIGNALS
             Merger merger(item_jobs[i], shared[i]);
             TopoDS_Shape merged = merger.Rebuild(item->raw);
-            FinishItem(item, merged, merger.faces(), merger.RawToMerged());
+            FinishItem(item, merged, merger.faces(), merger.RawToMerged(), runner);
             ++parallel;
             return;
           } catch (...) {

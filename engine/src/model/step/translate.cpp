@@ -41,6 +41,7 @@
 
 #include "core/parallel.h"
 #include "model/step/entities.h"
+#include "model/step/finish.h"
 #include "model/step/geometry.h"
 #include "model/step/topology.h"
 
@@ -1295,10 +1296,11 @@ Translated Translator::Run() {
   planning_ = false;
   results_.clear();
   std::vector<TopoDS_Shape> root_shapes;
+  const ParallelRunner runner(options_.threads);
   for (uint64_t root : roots) {
     TopoDS_Shape shape = TransferProduct(root, /*use_trsf=*/true);
     if (shape.IsNull()) continue;
-    BRepLib::EncodeRegularity(shape, kRegularityAngle);
+    EncodeRegularityInParallel(shape, kRegularityAngle, runner);
     root_shapes.push_back(shape);
   }
   if (root_shapes.empty()) ThrowBroken("the STEP translator could not transfer the shapes");
