@@ -47,10 +47,6 @@ void OnInterrupt(int) {
   if (g_interrupt_context != nullptr) g_interrupt_context->Cancel();
 }
 
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 // CPU seconds (user + system, all threads) this process has used so far.
 double ProcessCpuSeconds() {
   timespec t{};

@@ -62,10 +62,6 @@ pb::ModelInfo Describe(const StoredModel& model, bool cached) {
   return info;
 }
 
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 std::string Metadata(const grpc::ServerContext& context, const std::string& key) {
   const auto& metadata = context.client_metadata();
   auto it = metadata.find(key);

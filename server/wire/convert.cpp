@@ -8,8 +8,6 @@
 namespace rdmesh::server {
 namespace {
 
-Status Invalid(const std::string& message) { return Status(StatusCode::kInvalidArgument, message); }
-
 template <typename T, typename Field>
 void AppendRange(const std::vector<T>& from, int64_t begin, int64_t end, Field* to) {
   to->Reserve(static_cast<int>(end - begin));
@@ -382,12 +380,12 @@ Status MeshResultBuilder::Add(const pb::MeshEvent& event) {
 
 Status MeshResultBuilder::AddFace(const pb::FaceMesh& part) {
   const int id = part.face_id();
-  if (id < 1) return Invalid("FaceMesh with face_id " + std::to_string(id));
+  if (id < 1) return InvalidArgument("FaceMesh with face_id " + std::to_string(id));
   PendingFace& entry = Slot(id);
   const std::string where =
       "face " + std::to_string(id) + " part " + std::to_string(part.chunk_index()) + ": ";
   if (part.chunk_index() != entry.next_chunk) {
-    return Invalid(where + "expected part " + std::to_string(entry.next_chunk));
+    return InvalidArgument(where + "expected part " + std::to_string(entry.next_chunk));
   }
   FaceMesh& face = entry.face;
   if (part.chunk_index() == 0) {
@@ -403,13 +401,13 @@ Status MeshResultBuilder::AddFace(const pb::FaceMesh& part) {
     face.xyz.reserve(3 * part.node_count());
     face.triangles.reserve(3 * part.triangle_count());
   } else if (part.chunk_count() != entry.chunk_count) {
-    return Invalid(where + "chunk_count changed");
+    return InvalidArgument(where + "chunk_count changed");
   }
   if (part.node_offset() != face.node_count() || part.triangle_offset() != face.triangle_count()) {
-    return Invalid(where + "offsets do not follow the previous part");
+    return InvalidArgument(where + "offsets do not follow the previous part");
   }
   if (part.xyz_size() % 3 != 0 || part.triangles_size() % 3 != 0) {
-    return Invalid(where + "xyz or triangles not a multiple of 3");
+    return InvalidArgument(where + "xyz or triangles not a multiple of 3");
   }
   AppendField(part.xyz(), &face.xyz);
   AppendField(part.uv(), &face.uv);
@@ -419,7 +417,7 @@ Status MeshResultBuilder::AddFace(const pb::FaceMesh& part) {
   ++entry.next_chunk;
   if (entry.next_chunk == entry.chunk_count &&
       (face.node_count() != part.node_count() || face.triangle_count() != part.triangle_count())) {
-    return Invalid(where + "node or triangle count does not match the parts");
+    return InvalidArgument(where + "node or triangle count does not match the parts");
   }
   return Status::Ok();
 }
@@ -428,12 +426,12 @@ Status MeshResultBuilder::AddNodeIds(const pb::FaceNodeIds& part) {
   const int id = part.face_id();
   if (id < 1 || static_cast<std::size_t>(id) > faces_.size() || faces_[id - 1].chunk_count == 0 ||
       faces_[id - 1].next_chunk != faces_[id - 1].chunk_count) {
-    return Invalid("FaceNodeIds for face " + std::to_string(id) + " before its FaceMesh");
+    return InvalidArgument("FaceNodeIds for face " + std::to_string(id) + " before its FaceMesh");
   }
   PendingFace& entry = faces_[id - 1];
   if (part.chunk_index() != entry.next_ids_chunk ||
       part.node_offset() != static_cast<int64_t>(entry.face.global_ids.size())) {
-    return Invalid("FaceNodeIds of face " + std::to_string(id) + " out of order");
+    return InvalidArgument("FaceNodeIds of face " + std::to_string(id) + " out of order");
   }
   if (part.chunk_index() == 0) entry.ids_chunk_count = part.chunk_count();
   AppendField(part.global_ids(), &entry.face.global_ids);
@@ -442,7 +440,7 @@ Status MeshResultBuilder::AddNodeIds(const pb::FaceNodeIds& part) {
   AppendField(part.node_param(), &entry.node_param);
   ++entry.next_ids_chunk;
   if (entry.face.global_ids.size() > static_cast<std::size_t>(entry.face.node_count())) {
-    return Invalid("face " + std::to_string(id) + " has more global ids than nodes");
+    return InvalidArgument("face " + std::to_string(id) + " has more global ids than nodes");
   }
   return Status::Ok();
 }
@@ -451,9 +449,9 @@ Status MeshResultBuilder::AddEdge(const pb::EdgePolyline& part) {
   const std::string where = "EdgePolyline " + std::to_string(part.edge_id()) + " part " +
                             std::to_string(part.chunk_index()) + ": ";
   if (part.chunk_index() == 0) {
-    if (edge_parts_left_ != 0) return Invalid(where + "the previous edge is missing parts");
+    if (edge_parts_left_ != 0) return InvalidArgument(where + "the previous edge is missing parts");
     if (!edges_.empty() && part.edge_id() <= edges_.back().edge_id)
-      return Invalid(where + "not in edge id order");
+      return InvalidArgument(where + "not in edge id order");
     EdgeLine line;
     line.edge_id = part.edge_id();
     line.faces.assign(part.faces().begin(), part.faces().end());
@@ -465,25 +463,26 @@ Status MeshResultBuilder::AddEdge(const pb::EdgePolyline& part) {
     edge_parts_left_ = part.chunk_count();
   } else if (edge_parts_left_ == 0 || edges_.back().edge_id != part.edge_id() ||
              part.node_offset() != static_cast<int64_t>(edges_.back().nodes.size())) {
-    return Invalid(where + "out of order");
+    return InvalidArgument(where + "out of order");
   }
   for (int64_t node : part.nodes()) {
     if (node < 0 || node > std::numeric_limits<int32_t>::max())
-      return Invalid(where + "node id out of range");
+      return InvalidArgument(where + "node id out of range");
     edges_.back().nodes.push_back(static_cast<int32_t>(node));
   }
   --edge_parts_left_;
   if (edge_parts_left_ == 0 &&
       static_cast<int64_t>(edges_.back().nodes.size()) != part.node_count())
-    return Invalid(where + "node count does not match the parts");
+    return InvalidArgument(where + "node count does not match the parts");
   return Status::Ok();
 }
 
 Result<MeshResult> MeshResultBuilder::Finish() {
-  if (!has_started_ || !has_summary_) return Invalid("the Mesh stream ended early");
+  if (!has_started_ || !has_summary_) return InvalidArgument("the Mesh stream ended early");
   const int face_total = started_.model().faces();
   if (faces_.size() > static_cast<std::size_t>(face_total)) {
-    return Invalid("a FaceMesh names a face id beyond the model's " + std::to_string(face_total));
+    return InvalidArgument("a FaceMesh names a face id beyond the model's " +
+                           std::to_string(face_total));
   }
   faces_.resize(face_total);
   MeshResult result;
@@ -518,15 +517,15 @@ Result<MeshResult> MeshResultBuilder::Finish() {
       face.status = FaceStatus::kSkipped;
       face.reason = "not requested";
     } else if (entry.next_chunk != entry.chunk_count) {
-      return Invalid("face " + std::to_string(id) + " is missing parts");
+      return InvalidArgument("face " + std::to_string(id) + " is missing parts");
     }
     if (face.status != FaceStatus::kOk) continue;
     if (face.global_ids.size() != static_cast<std::size_t>(face.node_count())) {
-      return Invalid("face " + std::to_string(id) + " is missing its global node ids");
+      return InvalidArgument("face " + std::to_string(id) + " is missing its global node ids");
     }
     for (int64_t i = 0; i < face.node_count(); ++i) {
       const int64_t g = face.global_ids[i];
-      if (g < 0 || g >= nodes) return Invalid("global node id out of range");
+      if (g < 0 || g >= nodes) return InvalidArgument("global node id out of range");
       for (int k = 0; k < 3; ++k) mesh.xyz[3 * g + k] = face.xyz[3 * i + k];
       if (topology) {
         mesh.node_dim[g] = static_cast<int8_t>(entry.node_dim[i]);
@@ -536,7 +535,8 @@ Result<MeshResult> MeshResultBuilder::Finish() {
       }
     }
     for (int32_t local : face.triangles) {
-      if (local < 0 || local >= face.node_count()) return Invalid("triangle node id out of range");
+      if (local < 0 || local >= face.node_count())
+        return InvalidArgument("triangle node id out of range");
     }
     // As the engine assembles: face order, triangles that collapse at a pole left out.
     for (std::size_t k = 0; k + 2 < face.triangles.size(); k += 3) {
@@ -550,10 +550,11 @@ Result<MeshResult> MeshResultBuilder::Finish() {
       if (deviation) mesh.triangle_deviation.push_back(face.triangle_deviation[k / 3]);
     }
   }
-  if (edge_parts_left_ != 0) return Invalid("an EdgePolyline is missing parts");
+  if (edge_parts_left_ != 0) return InvalidArgument("an EdgePolyline is missing parts");
   for (const EdgeLine& line : edges_)
     for (int32_t node : line.nodes)
-      if (node >= nodes) return Invalid("an EdgePolyline node id is beyond the mesh's nodes");
+      if (node >= nodes)
+        return InvalidArgument("an EdgePolyline node id is beyond the mesh's nodes");
   result.edges = std::move(edges_);
   edges_.clear();
   result.faces.reserve(face_total);

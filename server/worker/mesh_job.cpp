@@ -20,10 +20,6 @@ using Clock = std::chrono::steady_clock;
 constexpr std::chrono::milliseconds kPoll(20);
 constexpr std::chrono::milliseconds kProgressInterval(100);
 
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 /// Events from the engine's threads to the writing thread. Push waits while the queue is over
 /// its byte limit, unless the run is stopping.
 class EventQueue {

@@ -62,8 +62,7 @@ Result<std::shared_ptr<const CachedModel>> ModelCache::GetOrLoad(const std::stri
     entry->info = GetModelInfo(**model);
     if (entry->info.name.empty()) entry->info.name = name;
     entry->file_bytes = bytes.size();
-    entry->load_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    entry->load_seconds = SecondsSince(start);
     if (entry->info.faces == 0) {
       result = Status(StatusCode::kEmptyModel, "the model '" + name + "' holds no faces");
     } else {

@@ -12,6 +12,12 @@ namespace rdmesh {
 
 struct FaceMesh;
 
+/// Wall seconds on the steady clock since `start`: how the engine, the CLI and the service time
+/// their stages.
+inline double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 /// Progress of a run: what stage it is in and how many faces are done.
 struct Progress {
   enum class Stage { kLoading, kEdges, kFaces, kAssembly, kDone };

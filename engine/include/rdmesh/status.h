@@ -45,6 +45,11 @@ class Status {
   std::string message_;
 };
 
+/// A kInvalidArgument Status: the answer of every option and request check.
+inline Status InvalidArgument(std::string message) {
+  return Status(StatusCode::kInvalidArgument, std::move(message));
+}
+
 /// A value or the Status that explains why there is none.
 template <typename T>
 class Result {

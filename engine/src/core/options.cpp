@@ -6,38 +6,40 @@
 namespace rdmesh {
 
 namespace {
-Status Invalid(const std::string& message) { return Status(StatusCode::kInvalidArgument, message); }
 bool Finite(double x) { return std::isfinite(x); }
 }  // namespace
 
 Status ValidateOptions(const MeshOptions& o) {
   const double rel = MaxDeviationRel(o);
   if (!Finite(o.max_deviation) || o.max_deviation < 0)
-    return Invalid("max_deviation must be a finite length >= 0 (model units)");
+    return InvalidArgument("max_deviation must be a finite length >= 0 (model units)");
   if (!Finite(rel) || rel < 0 || rel > 0.5)
-    return Invalid("max_deviation_rel must lie in [0, 0.5] (fraction of the bbox diagonal)");
+    return InvalidArgument(
+        "max_deviation_rel must lie in [0, 0.5] (fraction of the bbox diagonal)");
   if (o.max_deviation == 0 && rel > 0 && rel < 1e-7)
-    return Invalid("max_deviation_rel below 1e-7 of the diagonal is finer than the geometry");
+    return InvalidArgument(
+        "max_deviation_rel below 1e-7 of the diagonal is finer than the geometry");
   if (!Finite(o.rd_tolerance) || o.rd_tolerance < 0 || o.rd_tolerance > 1)
-    return Invalid("rd_tolerance must lie in [0, 1]");
-  if (o.max_triangles < 0) return Invalid("max_triangles must be >= 0");
-  if (o.max_triangles > 0 && o.max_triangles < 1) return Invalid("max_triangles must be >= 1");
+    return InvalidArgument("rd_tolerance must lie in [0, 1]");
+  if (o.max_triangles < 0) return InvalidArgument("max_triangles must be >= 0");
+  if (o.max_triangles > 0 && o.max_triangles < 1)
+    return InvalidArgument("max_triangles must be >= 1");
   if (!Finite(o.min_edge_length) || o.min_edge_length < 0)
-    return Invalid("min_edge_length must be a finite length >= 0");
+    return InvalidArgument("min_edge_length must be a finite length >= 0");
   if (!Finite(o.max_edge_length) || o.max_edge_length < 0)
-    return Invalid("max_edge_length must be a finite length >= 0");
+    return InvalidArgument("max_edge_length must be a finite length >= 0");
   if (o.max_edge_length > 0 && o.min_edge_length > o.max_edge_length)
-    return Invalid("min_edge_length must not exceed max_edge_length");
-  if (o.threads < 0 || o.threads > 1024) return Invalid("threads must lie in [0, 1024]");
+    return InvalidArgument("min_edge_length must not exceed max_edge_length");
+  if (o.threads < 0 || o.threads > 1024) return InvalidArgument("threads must lie in [0, 1024]");
   if (!Finite(o.timeout_seconds) || o.timeout_seconds < 0)
-    return Invalid("timeout_seconds must be >= 0");
+    return InvalidArgument("timeout_seconds must be >= 0");
   if (!Finite(o.sharp_edge_angle) || o.sharp_edge_angle < 0 || o.sharp_edge_angle > 180)
-    return Invalid("sharp_edge_angle must lie in [0, 180] degrees");
+    return InvalidArgument("sharp_edge_angle must lie in [0, 180] degrees");
   for (int id : o.face_ids)
-    if (id < 1) return Invalid("face_ids start at 1 (got " + std::to_string(id) + ")");
+    if (id < 1) return InvalidArgument("face_ids start at 1 (got " + std::to_string(id) + ")");
   if (o.max_deviation == 0 && rel == 0 && o.rd_tolerance == 0 && o.max_edge_length == 0 &&
       o.max_triangles == 0)
-    return Invalid(
+    return InvalidArgument(
         "no stop criterion: set a max deviation, an RD tolerance, a max edge length "
         "or a triangle budget");
   return Status::Ok();

@@ -15,30 +15,27 @@
 
 namespace rdmesh {
 
-namespace {
-Status Invalid(const std::string& message) { return Status(StatusCode::kInvalidArgument, message); }
-}  // namespace
-
 Result<std::vector<double>> ResolveLevels(std::vector<double> levels_rel,
                                           const MeshOptions& options) {
-  if (levels_rel.empty()) return Invalid("lod: no level given");
+  if (levels_rel.empty()) return InvalidArgument("lod: no level given");
   if (static_cast<int>(levels_rel.size()) > kMaxLevels)
-    return Invalid("lod: at most " + std::to_string(kMaxLevels) + " levels");
+    return InvalidArgument("lod: at most " + std::to_string(kMaxLevels) + " levels");
   if (options.max_deviation > 0)
-    return Invalid("lod levels are relative deviations: leave max_deviation at 0");
+    return InvalidArgument("lod levels are relative deviations: leave max_deviation at 0");
   if (options.max_deviation_rel)
-    return Invalid("lod levels are relative deviations: leave max_deviation_rel unset");
+    return InvalidArgument("lod levels are relative deviations: leave max_deviation_rel unset");
   if (options.max_triangles > 0)
-    return Invalid("lod levels are deviations: they do not combine with max_triangles");
+    return InvalidArgument("lod levels are deviations: they do not combine with max_triangles");
   for (double level : levels_rel) {
     if (!std::isfinite(level) || level <= 0 || level > 0.5)
-      return Invalid("lod: each level must lie in (0, 0.5] (fraction of the bbox diagonal)");
+      return InvalidArgument(
+          "lod: each level must lie in (0, 0.5] (fraction of the bbox diagonal)");
     Status valid = ValidateOptions(LevelOptions(options, level));
-    if (!valid.ok()) return Invalid("lod: " + valid.message());
+    if (!valid.ok()) return InvalidArgument("lod: " + valid.message());
   }
   std::sort(levels_rel.begin(), levels_rel.end(), std::greater<double>());
   if (std::adjacent_find(levels_rel.begin(), levels_rel.end()) != levels_rel.end())
-    return Invalid("lod: two levels are equal");
+    return InvalidArgument("lod: two levels are equal");
   return levels_rel;
 }
 

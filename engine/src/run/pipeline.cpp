@@ -22,9 +22,6 @@ namespace rdmesh {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double Since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 // Representative face mesh cap: far above any sane request, it only stops runaway refinement.
 constexpr int64_t kFaceTriangleCap = 20'000'000;
@@ -226,7 +223,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   // 4. Heal: split grid segments until every face's boundary loops are valid in (u,v).
   st = HealEdgeGrids(model, pcurves, sel->todo, options.nurbs, options.threads, context, &grids);
   if (!st.ok()) return st;
-  result.summary.edge_seconds = Since(t0);
+  result.summary.edge_seconds = SecondsSince(t0);
 
   auto t1 = Clock::now();
   const int64_t total = sel->wanted_count;
@@ -239,13 +236,13 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   st = PlaceInstances(model, pcurves, *sel, grids, options.threads, context, &reporter,
                       &result.faces, &refs);
   if (!st.ok()) return st;
-  result.summary.face_seconds = Since(t1);
+  result.summary.face_seconds = SecondsSince(t1);
 
   // 7. Assemble, in face order.
   if (context) context->ReportProgress({Progress::Stage::kAssembly, total, total});
   Assemble(&result.faces, refs, &result.mesh, options.threads);
   Summarise(grids, deviation, &result);
-  result.summary.seconds = Since(t0);
+  result.summary.seconds = SecondsSince(t0);
   // 8. Edge lines, from the pcurve table (not counted in the seconds, as before).
   if (output == RunOutput::kMeshAndEdgeLines) {
     Result<std::vector<EdgeLine>> edges =
