@@ -3,6 +3,9 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom2d_Curve.hxx>
+#include <GeomAPI_ProjectPointOnSurf.hxx>
+#include <Geom_Surface.hxx>
+#include <Precision.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -47,6 +50,9 @@ constexpr double kGapIgnored = 0.01;
 // 0.95 of it then puts the mesh up to 1.05 of it off the face, where the chords would need
 // ever more segments to do better).
 constexpr double kMinChordShare = 0.05;
+// An edge whose tolerance is coarser than the deviation is discretised by its curve alone when
+// that lies within this fraction of the deviation of its faces' surfaces (GridTolerance).
+constexpr double kCurveOnSurface = 0.1;
 
 // The length of the polyline through `samples` + 1 even parameter steps of [f, l].
 double PolylineLength(Curve& curve, double f, double l, int samples) {
@@ -231,6 +237,40 @@ double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, int edge_id,
   return gap;
 }
 
+// How far the edge's 3D curve lies from the surfaces of its faces (not from their pcurves): the
+// largest distance to the nearest surface point, at kGapSamples + 1 even steps; infinity where a
+// projection finds nothing.
+double CurveSurfaceGap(const Model& model, Curve& curve, double first, double last,
+                       const std::vector<int>& faces) {
+  double gap = 0;
+  for (int f : faces) {
+    TopLoc_Location location;
+    const Handle(Geom_Surface)& surface = BRep_Tool::Surface(model.face(f), location);
+    if (surface.IsNull()) return INFINITY;
+    const gp_Trsf to_surface = location.Transformation().Inverted();
+    for (int k = 0; k <= kGapSamples; ++k) {
+      const Vec3 x = curve.Point(first + (last - first) * k / kGapSamples);
+      GeomAPI_ProjectPointOnSurf projection(gp_Pnt(x.x, x.y, x.z).Transformed(to_surface), surface);
+      if (!projection.IsDone() || projection.NbPoints() == 0) return INFINITY;
+      gap = std::max(gap, projection.LowerDistance());
+    }
+  }
+  return gap;
+}
+
+// The tolerance an edge's grid heeds: its own, unless that is coarser than the deviation while
+// its 3D curve lies on its faces' surfaces much closer (then that distance). A tolerance is what
+// the edge's representations may disagree by; a STEP writer's repair can inflate it for pcurves
+// that miss (NXP_MPL115A1, issue 35: 0.4 on fillet arcs 0.24 long whose curves lie on both
+// faces), and the curve is still the edge: it is neither collapsed nor left coarse.
+double GridTolerance(const Model& model, const TopoDS_Edge& edge, Curve& curve, double first,
+                     double last, const std::vector<int>& faces, double max_deviation) {
+  const double tolerance = BRep_Tool::Tolerance(edge);
+  if (!(max_deviation > 0) || tolerance <= max_deviation) return tolerance;
+  const double gap = CurveSurfaceGap(model, curve, first, last, faces);
+  return gap < kCurveOnSurface * max_deviation ? std::max(gap, Precision::Confusion()) : tolerance;
+}
+
 }  // namespace
 
 Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const GridCriteria& gc,
@@ -291,7 +331,9 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
                 c.max_sagitta, std::max(gc.max_deviation - gap, kMinChordShare * gc.max_deviation));
           c.rd_tolerance = gc.rd_tolerance;
           c.max_length = gc.max_length;
-          c.min_length = std::max(gc.min_length, BRep_Tool::Tolerance(edge));
+          const double tolerance =
+              GridTolerance(model, edge, *curve, f, l, faces, gc.max_deviation);
+          c.min_length = std::max(gc.min_length, tolerance);
           // A closed edge, or one whose ends nearly meet, starts from three segments: its
           // end-to-end chord says nothing about its length.
           Vec3 start = curve->Point(f), end = curve->Point(l), mid = curve->Point(0.5 * (f + l));
@@ -301,7 +343,7 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
           g.t = DiscretizeCurve(*curve, f, l, c, context);
           // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
           // and faces see it as a pole segment (its pcurve may still span the face).
-          if (PolylineLength(*curve, f, l, kLengthSamples) <= BRep_Tool::Tolerance(edge))
+          if (PolylineLength(*curve, f, l, kLengthSamples) <= tolerance)
             g.t = {f, l}, g.degenerate = true;
         }
       } else {

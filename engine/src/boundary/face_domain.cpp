@@ -86,6 +86,66 @@ struct EdgeWalk {
   std::vector<Vec2> uv;
 };
 
+// A pcurve that misses its edge by more than this fraction of the edge's length is no guide to
+// where the edge lies on the surface (RepairLoosePcurves).
+constexpr double kLoosePcurve = 0.5;
+// RepairLoosePcurves looks for a point's nearest surface point from the best of this many
+// (u,v) samples along each parameter.
+constexpr int kRepairSamples = 24;
+
+// The (u,v) where the surface passes through `target`, searched over the surface's whole range:
+// the nearest of a grid of samples, then Gauss-Newton (ProjectNear). `found` false when that does
+// not land on the point (within 1e-3 of `scale`).
+Vec2 ProjectFromAfar(Surface& s, Vec3 target, double scale, bool* found) {
+  Vec2 best{s.umin, s.vmin};
+  double nearest = HUGE_VAL;
+  for (int i = 0; i <= kRepairSamples; ++i)
+    for (int j = 0; j <= kRepairSamples; ++j) {
+      const Vec2 q{s.umin + (s.umax - s.umin) * i / kRepairSamples,
+                   s.vmin + (s.vmax - s.vmin) * j / kRepairSamples};
+      const double d = Dist(s.Point(q.x, q.y), target);
+      if (d < nearest) nearest = d, best = q;
+    }
+  const Vec2 q = nearest > 0 ? ProjectNear(s, best, target, nearest) : best;
+  *found = Dist(s.Point(q.x, q.y), target) <= 1e-3 * scale;
+  return q;
+}
+
+// Where a walk's pcurve misses the edge's grid points by more than kLoosePcurve of the edge's
+// length (a STEP writer's repair left NXP_MPL115A1's fillet corners with pcurves 0.4 off on arcs
+// 0.24 long, issue 35; the edges' 3D curves lie on the surface), the walk takes the (u,v) of its
+// points on the surface instead, each moved by whole periods next to the one before. Left as it
+// is when a point does not lie on the surface.
+void RepairLoosePcurves(const Model& model, const std::vector<EdgeGrid>& grids, double period_u,
+                        double period_v, Surface& surface, std::vector<EdgeWalk>* walks) {
+  for (EdgeWalk& w : *walks) {
+    const EdgeGrid& g = grids[w.eid - 1];
+    if (g.degenerate) continue;
+    const int n = static_cast<int>(w.uv.size());
+    std::vector<Vec3> xyz(n);
+    double length = 0, miss = 0;
+    for (int k = 0; k < n; ++k) {
+      const int idx = w.reversed ? n - 1 - k : k;
+      xyz[k] = idx == 0       ? VertexPoint(model, g.first_vertex)
+               : idx == n - 1 ? VertexPoint(model, g.last_vertex)
+                              : g.xyz[idx];
+      if (k > 0) length += Dist(xyz[k], xyz[k - 1]);
+      miss = std::max(miss, Dist(surface.Point(w.uv[k].x, w.uv[k].y), xyz[k]));
+    }
+    if (!(miss > kLoosePcurve * length)) continue;
+    std::vector<Vec2> uv(n);
+    bool found = true;
+    for (int k = 0; k < n && found; ++k) {
+      uv[k] = ProjectFromAfar(surface, xyz[k], std::max(length, miss), &found);
+      if (k == 0) continue;
+      for (auto [period, axis] : {std::pair(period_u, &Vec2::x), std::pair(period_v, &Vec2::y)})
+        if (period > 0)
+          uv[k].*axis += period * std::round((uv[k - 1].*axis - uv[k].*axis) / period);
+    }
+    if (found) w.uv = std::move(uv);
+  }
+}
+
 double VertexTolerance(const Model& model, int vertex_id) {
   return vertex_id > 0 ? BRep_Tool::Tolerance(TopoDS::Vertex(model.vertices(vertex_id))) : 0.0;
 }
@@ -305,6 +365,7 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
     Status st = WalkWire(wire, grids, &walks);
     if (!st.ok()) return st;
     if (walks.empty()) continue;
+    RepairLoosePcurves(model, grids, period_u, period_v, surface, &walks);
     // The slack for pcurve ends that meet: 1e-3 of the loop's extent in (u,v), as before any
     // tolerance is looked at.
     double span = 0;

@@ -44,8 +44,11 @@ struct FaceDomain {
 /// by edge id - 1). Consecutive pcurves are joined across gaps that the vertex tolerance allows
 /// and across whole periods of a periodic surface. An edge grid point whose pcurve (u,v) misses
 /// it on the surface (a loose pcurve, within a large edge tolerance) takes the nearby (u,v) where
-/// the surface passes through it. Fails with a reason that names the edges for
-/// bad pcurves and loops that do not close.
+/// the surface passes through it; an edge whose pcurve misses it by more than half its length
+/// takes at every grid point the (u,v) where the surface passes through the point, searched over
+/// the whole surface. A loop that runs over more than one period, the rest made of degenerate
+/// edges, is taken without them when it closes so over one period. Fails with a reason that names
+/// the edges for bad pcurves and loops that do not close.
 Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_id,
                        const std::vector<EdgeGrid>& grids, Surface& surface, FaceDomain* domain);
 

@@ -14,6 +14,7 @@
 #include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeRevol.hxx>
 #include <BRepTools.hxx>
 #include <BRepTools_ReShape.hxx>
@@ -48,6 +49,7 @@
 #include <gp_Pln.hxx>
 #include <gp_Vec2d.hxx>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -565,6 +567,73 @@ TEST(FaceDomainTest, ALoopOverTwoTurnsIsMeshedOnceWithoutItsDegenerateEdges) {
   // Pappus: the arc's length times the turn of its centroid, 2 + 1 / pi from the axis.
   const double once = (M_PI / 4) * 2 * M_PI * (2 + 1 / M_PI);
   EXPECT_NEAR(result->faces[ring - 1].area, once, 0.01 * once);
+  std::map<std::pair<int, int>, int> uses;
+  const std::vector<int32_t>& t = result->mesh.triangles;
+  for (size_t k = 0; k < t.size(); k += 3)
+    for (int i = 0; i < 3; ++i)
+      ++uses[{std::min(t[k + i], t[k + (i + 1) % 3]), std::max(t[k + i], t[k + (i + 1) % 3])}];
+  for (const auto& [edge, n] : uses) EXPECT_EQ(n, 2);
+}
+
+// A pin (a cylinder of radius 0.05, 1 long) written as NXP_MPL115A1's fillets were (issue 35): its
+// top circle's tolerance and its vertex's inflated to 0.4, more than the circle's length (0.31),
+// and the circle's pcurve on the side moved 0.3 down the axis, while its 3D curve lies on both
+// faces. (It used to collapse the circle, fail the top and refine the side to 188,778 triangles.)
+TopoDS_Shape DirtyPin() {
+  const TopoDS_Shape pin = BRepPrimAPI_MakeCylinder(0.05, 1).Shape();
+  TopoDS_Face side;
+  for (TopExp_Explorer fx(pin, TopAbs_FACE); fx.More(); fx.Next())
+    if (BRepAdaptor_Surface(TopoDS::Face(fx.Current())).GetType() == GeomAbs_Cylinder)
+      side = TopoDS::Face(fx.Current());
+  BRep_Builder builder;
+  for (TopExp_Explorer ex(side, TopAbs_EDGE); ex.More(); ex.Next()) {
+    const TopoDS_Edge& e = TopoDS::Edge(ex.Current());
+    TopoDS_Vertex v0, v1;
+    TopExp::Vertices(e, v0, v1);
+    if (BRep_Tool::IsClosed(e, side) || BRep_Tool::Pnt(v0).Z() < 0.5) continue;
+    double first, last;
+    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, side, first, last);
+    builder.UpdateEdge(e, Handle(Geom2d_Curve)::DownCast(pcurve->Translated(gp_Vec2d(0, -0.3))),
+                       side, 0.4);
+    builder.UpdateVertex(v0, 0.4);
+  }
+  return pin;
+}
+
+TEST(FaceDomainTest, AnEdgeOnItsFacesIsMeshedByItsCurveWhateverItsTolerance) {
+  auto model = LoadShape(DirtyPin(), "dirty_pin");
+  ASSERT_TRUE(model);
+  ASSERT_NEAR(model->max_edge_tolerance, 0.4, 1e-6);
+  const double deviation = 1e-3 * GetModelInfo(*model).diagonal;
+  const std::vector<EdgeGrid> grids = Grids(*model, deviation);
+  int side = 0;
+  for (int f = 1; f <= model->face_count(); ++f)
+    if (BRepAdaptor_Surface(model->face(f)).GetType() == GeomAbs_Cylinder) side = f;
+  ASSERT_GT(side, 0);
+  // The circles are not collapsed, and their chords are finer than the 0.4 tolerance.
+  for (int e = 1; e <= model->edge_count(); ++e) {
+    if (BRep_Tool::IsClosed(model->edge(e), model->face(side))) continue;
+    EXPECT_FALSE(grids[e - 1].degenerate) << "edge " << e;
+    EXPECT_GE(grids[e - 1].t.size(), 9u) << "edge " << e;
+  }
+  // The side's boundary nodes sit where the surface passes through them.
+  FaceDomain domain;
+  ASSERT_TRUE(Domain(*model, side, grids, &domain).ok());
+  const FacePcurves pcurves = testing::Pcurves(*model);
+  std::unique_ptr<Surface> surface =
+      MakeFaceSurface(model->face(side), false, pcurves.Bounds(*model, side));
+  for (size_t i = 0; i < domain.uv.size(); ++i)
+    EXPECT_LT(Dist(surface->Point(domain.uv[i].x, domain.uv[i].y), domain.xyz[i]), 1e-9)
+        << "node " << i;
+  EXPECT_TRUE(FindConflicts(domain).empty());
+  auto result = MeshModel(*model, MeshOptions());
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  for (const FaceMesh& f : result->faces) {
+    EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+    EXPECT_EQ(f.reason, "") << "face " << f.face_id;
+    EXPECT_LE(f.max_deviation, deviation * (1 + 1e-9)) << "face " << f.face_id;
+  }
+  EXPECT_LE(result->summary.triangles, 100);
   std::map<std::pair<int, int>, int> uses;
   const std::vector<int32_t>& t = result->mesh.triangles;
   for (size_t k = 0; k < t.size(); k += 3)
