@@ -1,5 +1,6 @@
 // step_equivalence: rdmesh's own STEP reader (step::Parse + step::TranslateStep) against the
-// engine's OCCT read (STEPCAFControl_Reader, model_readers.cpp) on many files (issue 34).
+// engine's OCCT read (STEPCAFControl_Reader, model_readers.cpp, forced with
+// RDMESH_STEP_READER=occt) on many files (issue 34).
 //
 //   step_equivalence [--threads N] [--timeout S] [--area-rel R] FILE_OR_DIR...
 //
@@ -81,6 +82,8 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
     auto start = Clock::now();
     occt = rdmesh::ReadModelBytes(bytes, rdmesh::ModelFormat::kStep, path, name, nullptr);
     occt_s = Since(start);
+    if (occt.ok() && occt->reader != "occt")
+      occt = rdmesh::Status(rdmesh::StatusCode::kInternal, "the engine's read was not OCCT's");
   };
   auto run_ours = [&] {
     auto start = Clock::now();
@@ -133,6 +136,8 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
       line += ", \"numbering\": " + Json(comparison.numbering_difference);
     if (!comparison.tolerance_difference.empty())
       line += ", \"tolerances\": " + Json(comparison.tolerance_difference);
+    if (!comparison.name_line_break_difference.empty())
+      line += ", \"name_line_breaks\": " + Json(comparison.name_line_break_difference);
     if (ours->read.length_unit != occt->length_unit ||
         ours->read.unit_scale_mm != occt->unit_scale_mm) {
       equivalent = false;
@@ -227,6 +232,8 @@ bool Flag(const std::string& line, const std::string& key) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The engine reads STEP with rdmesh's own reader by default; the comparison is against OCCT's.
+  setenv("RDMESH_STEP_READER", "occt", 1);
   Options options;
   std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {
@@ -264,7 +271,7 @@ int main(int argc, char** argv) {
                                  nullptr);
     (void)rdmesh::step::Parse(bytes, nullptr);
   }
-  int supported = 0, equivalent = 0, failed = 0;
+  int supported = 0, equivalent = 0, failed = 0, numbering = 0, tolerances = 0, line_breaks = 0;
   double log_ratio = 0, ours_total = 0, occt_total = 0, worst_area = 0;
   for (size_t i = 0; i < files.size(); ++i) {
     const std::string line = options.isolate ? RunIsolated(files[i], options, i % 2 == 0)
@@ -272,6 +279,9 @@ int main(int argc, char** argv) {
     std::printf("%s\n", line.c_str());
     std::fflush(stdout);
     if (line.find("\"error\":") != std::string::npos) ++failed;
+    if (line.find("\"numbering\":") != std::string::npos) ++numbering;
+    if (line.find("\"tolerances\":") != std::string::npos) ++tolerances;
+    if (line.find("\"name_line_breaks\":") != std::string::npos) ++line_breaks;
     if (Flag(line, "supported")) ++supported;
     if (!Flag(line, "equivalent")) continue;
     ++equivalent;
@@ -286,9 +296,10 @@ int main(int argc, char** argv) {
       "{\"summary\": {\"files\": %zu, \"supported\": %d, \"equivalent\": %d, \"failed\": %d, "
       "\"supported_fraction\": %.4f, \"equivalent_fraction\": %.4f, "
       "\"time_ratio_geomean\": %.4f, \"ours_seconds\": %.3f, \"occt_seconds\": %.3f, "
-      "\"worst_area_rel\": %.3g}}\n",
+      "\"worst_area_rel\": %.3g, \"numbering_differences\": %d, \"tolerance_differences\": %d, "
+      "\"name_line_break_differences\": %d}}\n",
       files.size(), supported, equivalent, failed, n > 0 ? supported / n : 0.0,
       n > 0 ? equivalent / n : 0.0, equivalent > 0 ? std::exp(log_ratio / equivalent) : 0.0,
-      ours_total, occt_total, worst_area);
+      ours_total, occt_total, worst_area, numbering, tolerances, line_breaks);
   return 0;
 }

@@ -34,6 +34,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -60,6 +61,23 @@ std::string Header() {
 
 std::string Wrap(const std::string& data) {
   return Header() + data + "ENDSEC;\nEND-ISO-10303-21;\n";
+}
+
+// The engine's STEP read through OCCT's reader alone (RDMESH_STEP_READER=occt for the call; the
+// engine reads with this translator by default since d5cad75), checked to have come from OCCT.
+Result<ReadShape> ReadWithOcct(const std::string& bytes, const std::string& path,
+                               const std::string& name) {
+  const char* before = std::getenv("RDMESH_STEP_READER");
+  const std::string saved = before != nullptr ? before : "";
+  setenv("RDMESH_STEP_READER", "occt", 1);
+  Result<ReadShape> read = ReadModelBytes(bytes, ModelFormat::kStep, path, name, nullptr);
+  if (before != nullptr) {
+    setenv("RDMESH_STEP_READER", saved.c_str(), 1);
+  } else {
+    unsetenv("RDMESH_STEP_READER");
+  }
+  if (read.ok()) EXPECT_EQ(read->reader, "occt");
+  return read;
 }
 
 File ParseOk(const std::string& bytes) {
@@ -229,8 +247,7 @@ TEST_F(GeometryParity, CurvesMatchStepToGeom) {
        "#41=TRIMMED_CURVE('',#10,(#21),(#24),.T.,.CARTESIAN.);\n"
        "#42=TRIMMED_CURVE('',#30,(0.1),(0.9),.F.,.UNSPECIFIED.);\n"
        "#43=POLYLINE('',(#20,#21,#22,#23));\n");
-  for (uint64_t id : {10, 11, 12, 13, 14, 15, 30, 31, 32, 33, 40, 41, 42, 43})
-    ExpectSameCurve(id);
+  for (uint64_t id : {10, 11, 12, 13, 14, 15, 30, 31, 32, 33, 40, 41, 42, 43}) ExpectSameCurve(id);
 }
 
 TEST_F(GeometryParity, SurfacesMatchStepToGeom) {
@@ -401,7 +418,7 @@ std::string CubeFile(const CubeOptions& options) {
 }
 
 ShapeSummary OcctSummary(const std::string& bytes, ReadShape* out = nullptr) {
-  Result<ReadShape> occt = ReadModelBytes(bytes, ModelFormat::kStep, "", "t.step", nullptr);
+  Result<ReadShape> occt = ReadWithOcct(bytes, "", "t.step");
   EXPECT_TRUE(occt.ok()) << occt.status().ToString();
   if (!occt.ok()) return ShapeSummary();
   if (out != nullptr) *out = *occt;
@@ -592,8 +609,7 @@ void ExpectEquivalentOrUnsupported(const fs::path& dir) {
     SCOPED_TRACE(path.string());
     std::ifstream in(path, std::ios::binary);
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    Result<ReadShape> occt =
-        ReadModelBytes(bytes, ModelFormat::kStep, path.string(), path.filename().string(), nullptr);
+    Result<ReadShape> occt = ReadWithOcct(bytes, path.string(), path.filename().string());
     Result<Translated> ours = Translate(bytes);
     if (!occt.ok()) {
       // A file OCCT's reader refuses is refused or unsupported here too.

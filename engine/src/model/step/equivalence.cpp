@@ -237,7 +237,18 @@ Comparison Compare(const ShapeSummary& ours, const ShapeSummary& theirs, double 
       differ(buffer);
     }
   }
-  if (ours.document != theirs.document) {
+  auto without_cr = [](std::vector<std::string> lines) {
+    for (std::string& line : lines)
+      line.erase(std::remove(line.begin(), line.end(), '\r'), line.end());
+    return lines;
+  };
+  if (ours.document != theirs.document &&
+      without_cr(ours.document) == without_cr(theirs.document)) {
+    size_t i = 0;
+    while (ours.document[i] == theirs.document[i]) ++i;
+    result.name_line_break_difference =
+        "document line " + std::to_string(i + 1) + ": a name differs by carriage returns only";
+  } else if (ours.document != theirs.document) {
     size_t i = 0;
     while (i < ours.document.size() && i < theirs.document.size() &&
            ours.document[i] == theirs.document[i])

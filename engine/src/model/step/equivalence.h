@@ -19,9 +19,9 @@ struct ShapeSummary {
   /// Per edge (TopExp::MapShapes order): its vertices' ids in the edge's own order, with their
   /// orientations, so edge and vertex numbering can be compared.
   std::vector<std::string> edge_vertices;
-  std::vector<std::array<double, 3>> vertex_points;  ///< per vertex id
+  std::vector<std::array<double, 3>> vertex_points;        ///< per vertex id
   std::vector<double> edge_tolerances, vertex_tolerances;  ///< per edge and vertex id
-  std::array<double, 6> box{};                       ///< BRepBndLib::AddOptimal, without tolerances
+  std::array<double, 6> box{};  ///< BRepBndLib::AddOptimal, without tolerances
   bool has_box = false;
   /// The document as lines: every label under the free shapes with its kind (assembly,
   /// instance with its placement, part), name, colours and coloured sub-shapes (by face index).
@@ -42,6 +42,10 @@ struct Comparison {
   std::string numbering_difference;
   /// Where edge or vertex tolerances differ, "" when identical (not part of `equivalent`).
   std::string tolerance_difference;
+  /// Where the documents differ only by carriage returns in names, "" otherwise (not part of
+  /// `equivalent`): OCCT's STEP lexer keeps the CR of a CRLF line break inside a string (it
+  /// drops the LF), where Part 21 (and DecodeString) drops line breaks; KiCad's long DSUB names.
+  std::string name_line_break_difference;
 };
 
 /// Compares two summaries: exact counts, types and document; areas within `area_rel`
