@@ -4,9 +4,11 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <string>
 #include <utility>
 
 #include "wire/frame.h"
+#include "worker/worker.h"
 
 namespace rdmesh::server {
 namespace {
@@ -30,6 +32,11 @@ Status DeathStatus(int wait_status, const std::string& phase, const std::string&
     return Status(StatusCode::kResourceExhausted,
                   std::string("the worker passed its CPU time limit of ") + limit +
                       " s (--worker-cpu-seconds) while " + doing);
+  }
+  if (WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == kWorkerOutOfMemoryExit) {
+    return Status(StatusCode::kResourceExhausted, "the worker reached its memory limit of " +
+                                                      std::to_string(settings.memory_bytes >> 20) +
+                                                      " MiB (--worker-memory) while " + doing);
   }
   if (WIFSIGNALED(wait_status) && WTERMSIG(wait_status) == SIGKILL) {
     return Status(StatusCode::kResourceExhausted,

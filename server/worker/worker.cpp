@@ -232,6 +232,21 @@ class Worker {
 
 }  // namespace
 
+namespace {
+
+uint64_t g_memory_bytes = 0;  // the worker's RLIMIT_AS, for OnTerminate
+
+// std::terminate near the address-space limit is an allocation or a thread that failed where no
+// handler could see it (a library's own thread): that is the memory limit, so say so to the
+// daemon by the exit code; any other terminate stays an abort (a crash).
+[[noreturn]] void OnTerminate() {
+  if (g_memory_bytes > 0 && PeakAddressSpace() >= g_memory_bytes / 10 * 9)
+    _exit(kWorkerOutOfMemoryExit);
+  std::abort();
+}
+
+}  // namespace
+
 int RunWorker(const WorkerConfig& config) {
   // No PR_SET_PDEATHSIG: it fires when the daemon *thread* that started this process ends
   // (gRPC's handler threads come and go). The inbox's reader ends the process instead, as soon
@@ -239,6 +254,8 @@ int RunWorker(const WorkerConfig& config) {
   if (config.memory_bytes > 0) {
     rlimit limit{config.memory_bytes, config.memory_bytes};
     setrlimit(RLIMIT_AS, &limit);
+    g_memory_bytes = config.memory_bytes;
+    std::set_terminate(OnTerminate);
   }
   Worker worker(config);
   return worker.Run();

@@ -18,6 +18,11 @@ struct WorkerConfig {
   uint64_t store_bytes = 0;  ///< its size limit; 0 = none
 };
 
+/// The exit code of a worker that ended near its memory limit through std::terminate (a thread
+/// or an allocation failed where no exception can be caught, e.g. inside TBB's own threads):
+/// the daemon reports it as the memory limit, not as a crash.
+constexpr int kWorkerOutOfMemoryExit = 86;
+
 /// Serves calls from the daemon, one at a time, until the socket closes. Parsed models stay in
 /// the worker (a bounded LRU cache), so that meshing the same model again does not parse it again.
 /// Also ends, at once, when the daemon dies (its end of the socket closes). Returns the process

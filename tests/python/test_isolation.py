@@ -91,18 +91,18 @@ def test_reader_crash_fails_its_call_only(start_daemon):
     assert client.mesh(CUBE).summary.faces_ok == 9
 
 
-def test_mesher_crash_fails_its_job_only(start_daemon):
+def test_former_mesher_crash_fails_its_faces_only(start_daemon):
     daemon = start_daemon()
     client = daemon.client()
-    # LINE #235 lost its CARTESIAN_POINT: OCCT reads the model, rdmesh's constrained
-    # triangulation then crashes on the face (tests/data/fuzz/README.md).
+    # LINE #235 lost its CARTESIAN_POINT: OCCT reads the model; rdmesh's constrained
+    # triangulation crashed on its faces until their boundary loops were checked (the loops now
+    # cross, and those faces fail with the reason: tests/data/fuzz/README.md). A mesher crash
+    # itself is test_worker_killed_mid_mesh_fails_that_job_only's.
     info = client.upload(DATA / "fuzz" / "crash_mesher_missing_point.step")
-    with pytest.raises(RdmeshError) as error:
-        client.mesh(info)
-    assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
-    assert "the mesher crashed (SIGSEGV) on this model" in error.value.details
+    summary = client.mesh(info).summary
+    assert summary.faces_failed == 3 and summary.faces_ok == 6
     assert daemon.alive()
-    assert client.server_status().workers_lost == 1
+    assert client.server_status().workers_lost == 0
     assert client.mesh(CUBE).summary.faces_ok == 9
 
 
@@ -237,14 +237,19 @@ def test_memory_limit_fails_the_call_not_the_daemon(start_daemon):
 
 def test_fuzz_regressions_end_as_documented_in_one_daemon(start_daemon):
     """Every file of tests/data/fuzz through one daemon: the status matches the CLI's documented
-    exit code (3: the upload fails, 1: the mesh call fails, 4: the deadline), with the same
-    message, and the daemon serves a well-formed model at the end."""
+    exit code (3: the upload fails, 1: the mesh call fails, 4: the deadline, 0: the mesh
+    comes back with failed faces), with the same message, and the daemon serves a well-formed
+    model at the end."""
     table = (DATA / "fuzz" / "README.md").read_text()
-    cases = re.findall(r"^\| `(\w+\.step)` \|.*\| ([134]) \| ([^|]+?) \|$", table, re.M)
+    cases = re.findall(r"^\| `(\w+\.step)` \|.*\| ([0134]) \| ([^|]+?) \|$", table, re.M)
     assert len(cases) == len(list((DATA / "fuzz").glob("*.step")))
     daemon = start_daemon()
     client = daemon.client()
     for name, exit_code, message in cases:
+        if exit_code == "0":
+            result = client.mesh(client.upload(DATA / "fuzz" / name), timeout_seconds=2)
+            assert result.summary.faces_failed > 0, name
+            continue
         with pytest.raises(RdmeshError) as error:
             info = client.upload(DATA / "fuzz" / name)
             assert exit_code != "3", name
