@@ -193,20 +193,20 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
                     "cannot read '" + name + "': " + std::to_string(derived->face_area.size()) +
                         " face areas for " + std::to_string(model->face_count()) + " faces");
     }
-    read.stages.emplace_back("topology", StageSeconds(start));
+    read.stages.emplace_back("topology", SecondsSince(start));
     auto step_start = std::chrono::steady_clock::now();
     if (derived != nullptr) {
       model->face_area = derived->face_area;
     } else {
       ComputeFaceAreas(model.get());
     }
-    read.stages.emplace_back("areas", StageSeconds(step_start));
+    read.stages.emplace_back("areas", SecondsSince(step_start));
     step_start = std::chrono::steady_clock::now();
     for (int id = 1; id <= model->edge_count(); ++id)
       model->max_edge_tolerance =
           std::max(model->max_edge_tolerance, BRep_Tool::Tolerance(model->edge(id)));
     model->info = ComputeModelInfo(*model, /*bounding_box=*/derived == nullptr);
-    read.stages.emplace_back("info", StageSeconds(step_start));
+    read.stages.emplace_back("info", SecondsSince(step_start));
     if (derived != nullptr) {
       model->info.bbox = derived->bbox;
       model->info.diagonal = derived->diagonal;
@@ -266,7 +266,7 @@ Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat form
   reread->stages = std::move(read->stages);
   reread->reader = read->reader;
   reread->reader_note = read->reader_note;
-  reread->stages.emplace_back("canonical", StageSeconds(start));
+  reread->stages.emplace_back("canonical", SecondsSince(start));
   canonical.payload = std::move(*payload);
   Result<std::shared_ptr<const Model>> model =
       BuildModel(std::move(*reread), format, name, display_name);
@@ -298,9 +298,8 @@ Result<std::shared_ptr<const Model>> LoadModel(const std::string& path, Context*
   Result<std::string> bytes = ReadModelFile(path);
   if (!bytes.ok()) return bytes.status();
   std::string name = std::filesystem::path(path).filename().string();
-  Result<CanonicalModel> parsed =
-      ParseCanonical(*bytes, ResolveFormat(ModelFormat::kAuto, path, *bytes), path, path, name,
-                     context);
+  Result<CanonicalModel> parsed = ParseCanonical(
+      *bytes, ResolveFormat(ModelFormat::kAuto, path, *bytes), path, path, name, context);
   if (!parsed.ok()) return parsed.status();
   return parsed->model;
 }

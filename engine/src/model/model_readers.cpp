@@ -351,7 +351,7 @@ Result<std::optional<ReadShape>> ReadStepOwn(const std::string& bytes, const Con
     *why = "parser: " + file.status().message();
     return std::optional<ReadShape>();
   }
-  const double parse_seconds = StageSeconds(start);
+  const double parse_seconds = SecondsSince(start);
   Result<step::Translated> translated =
       step::TranslateStep(*file, step::TranslateOptions{}, context);
   if (context != nullptr && context->ShouldStop()) return context->StopStatus();
@@ -395,7 +395,7 @@ Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
   if (reader.NbRootsForTransfer() == 0) return ParseError(name, "the STEP file holds no shapes");
 
   ReadShape read;
-  read.stages.emplace_back("occt_parse", StageSeconds(start));
+  read.stages.emplace_back("occt_parse", SecondsSince(start));
   start = std::chrono::steady_clock::now();
   TColStd_SequenceOfAsciiString lengths, angles, solid_angles;
   reader.ChangeReader().FileUnits(lengths, angles, solid_angles);
@@ -408,7 +408,7 @@ Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
     return ParseError(name, "the STEP translator could not transfer the shapes");
   }
   read.shape = FreeShapesCompound(read.doc);
-  read.stages.emplace_back("occt_transfer", StageSeconds(start));
+  read.stages.emplace_back("occt_transfer", SecondsSince(start));
   read.reader = "occt";
   read.reader_note = fallback;
   return read;

@@ -8,10 +8,6 @@
 
 namespace rdmesh {
 
-double StageSeconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 TopoDS_Shape FreeShapesCompound(const Handle(TDocStd_Document) & doc) {
   Handle(XCAFDoc_ShapeTool) shape_tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
   TDF_LabelSequence labels;

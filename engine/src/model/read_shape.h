@@ -4,7 +4,6 @@
 #include <Standard_Handle.hxx>
 #include <TDocStd_Document.hxx>
 #include <TopoDS_Shape.hxx>
-#include <chrono>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,16 +17,14 @@ struct ReadShape {
   Handle(TDocStd_Document) doc;
   std::string length_unit;
   double unit_scale_mm = 1.0;
-  /// Where the load's time went so far, in order (stage name, seconds): ModelInfo::load_stages.
+  /// Where the load's time went so far, in order (stage name, seconds; SecondsSince in
+  /// rdmesh/context.h): ModelInfo::load_stages.
   std::vector<std::pair<std::string, double>> stages;
   /// Which reader built it: "rdmesh" (model/step), "occt", or "" (BREP, IGES, a stored payload).
   std::string reader;
   /// Why rdmesh's own STEP reader passed the file to OCCT's ("" when it did not).
   std::string reader_note;
 };
-
-/// Seconds from `start` to now, on the steady clock (for ReadShape::stages).
-double StageSeconds(std::chrono::steady_clock::time_point start);
 
 /// The document's free shapes (with their locations) as one compound: the model's shape.
 TopoDS_Shape FreeShapesCompound(const Handle(TDocStd_Document) & doc);
