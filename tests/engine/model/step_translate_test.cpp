@@ -417,6 +417,13 @@ std::string CubeFile(const CubeOptions& options) {
   return Wrap(d + options.extra);
 }
 
+// The id of the first LINE in `text` (an edge's curve in CubeFile).
+int EdgeLineId(const std::string& text) {
+  const size_t at = text.find("=LINE(");
+  const size_t hash = text.rfind('#', at);
+  return std::atoi(text.c_str() + hash + 1);
+}
+
 ShapeSummary OcctSummary(const std::string& bytes, ReadShape* out = nullptr) {
   Result<ReadShape> occt = ReadWithOcct(bytes, "", "t.step");
   EXPECT_TRUE(occt.ok()) << occt.status().ToString();
@@ -470,6 +477,65 @@ TEST(StepTranslateTest, CubeSharesEdgesAndMatchesOcct) {
   EXPECT_TRUE(comparison.equivalent) << comparison.difference;
   EXPECT_EQ(comparison.worst_area_rel, 0.0);
   EXPECT_EQ(comparison.numbering_difference, "");
+}
+
+TEST(StepTranslateTest, CurveSetBesideTheSolidMatchesOcct) {
+  // A GEOMETRIC_CURVE_SET of a point, a circle (with a curve colour) and a trimmed line in the
+  // solid's representation, both curves in a hidden layer: a compound of a vertex and two edges
+  // beside the solid, the colour on the circle's edge, the layer on both edges.
+  CubeOptions options;
+  options.extra =
+      "#1030=GEOMETRIC_CURVE_SET('',(#1,#1031,#1032));\n"
+      "#1031=CIRCLE('',#1033,0.5);\n"
+      "#1032=TRIMMED_CURVE('',#1036,(PARAMETER_VALUE(0.)),(PARAMETER_VALUE(2.)),.T.,"
+      ".PARAMETER.);\n"
+      "#1033=AXIS2_PLACEMENT_3D('',#1,#1034,#1035);\n"
+      "#1034=DIRECTION('',(0.,0.,1.));\n"
+      "#1035=DIRECTION('',(1.,0.,0.));\n"
+      "#1036=LINE('',#1,#1037);\n"
+      "#1037=VECTOR('',#1035,1.);\n"
+      "#1040=STYLED_ITEM('',(#1041),#1031);\n"
+      "#1041=PRESENTATION_STYLE_ASSIGNMENT((#1042));\n"
+      "#1042=CURVE_STYLE('',#1043,POSITIVE_LENGTH_MEASURE(0.1),#1044);\n"
+      "#1043=DRAUGHTING_PRE_DEFINED_CURVE_FONT('continuous');\n"
+      "#1044=COLOUR_RGB('',0.,0.,1.);\n"
+      "#1045=MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(#1040),#1010);\n"
+      "#1050=PRESENTATION_LAYER_ASSIGNMENT('wires','',(#1031,#1032));\n"
+      "#1051=INVISIBILITY((#1050));\n";
+  std::string text = CubeFile(options);
+  const std::string from = "#1009=ADVANCED_BREP_SHAPE_REPRESENTATION('',(#1000)";
+  text.replace(text.find(from), from.size(),
+               "#1009=ADVANCED_BREP_SHAPE_REPRESENTATION('',(#1000,#1030)");
+  Result<Translated> ours = Translate(text);
+  ASSERT_TRUE(ours.ok()) << ours.status().ToString();
+  ASSERT_TRUE(ours->supported) << ours->unsupported;
+  const ShapeSummary summary = Summarize(ours->read);
+  EXPECT_EQ(summary.solids, 1);
+  EXPECT_EQ(summary.faces, 6);
+  EXPECT_EQ(summary.edges, 14);
+  bool coloured_edge = false, layered = false;
+  for (const std::string& line : summary.document) {
+    if (line.find("sub-shape '' curve=(0.000000 0.000000 1.000000") != std::string::npos)
+      coloured_edge = true;
+    if (line.find("layers='wires' (hidden)") != std::string::npos) layered = true;
+  }
+  EXPECT_TRUE(coloured_edge);
+  EXPECT_TRUE(layered);
+  const Comparison comparison = Compare(summary, OcctSummary(text));
+  EXPECT_TRUE(comparison.equivalent) << comparison.difference;
+  EXPECT_EQ(comparison.numbering_difference, "");
+  EXPECT_EQ(comparison.tolerance_difference, "");
+
+  // A curve that is both in a set and an edge's curve is not reproduced.
+  std::string shared = text;
+  shared.replace(
+      shared.find("#1030=GEOMETRIC_CURVE_SET('',(#1,#1031,#1032))"),
+      std::string("#1030=GEOMETRIC_CURVE_SET('',(#1,#1031,#1032))").size(),
+      "#1030=GEOMETRIC_CURVE_SET('',(#1,#1031,#" + std::to_string(EdgeLineId(text)) + "))");
+  Result<Translated> refused = Translate(shared);
+  ASSERT_TRUE(refused.ok()) << refused.status().ToString();
+  EXPECT_FALSE(refused->supported);
+  EXPECT_NE(refused->unsupported.find("used elsewhere"), std::string::npos) << refused->unsupported;
 }
 
 TEST(StepTranslateTest, InchesScaleToMillimetres) {
@@ -563,9 +629,9 @@ TEST(StepTranslateTest, UnsupportedConstructsAreNamed) {
        line_id + "=B_SPLINE_CURVE_WITH_KNOTS('',1,(#1,#1),.UNSPECIFIED.,.F.,.F.,"
                  "(2,99999999999),(0.,1.),.UNSPECIFIED.);\n#9999=LINE(",
        "multiplicity"},
-      // A wireframe item beside the solid.
+      // A composite curve in a wireframe item beside the solid.
       {"#1009=ADVANCED_BREP_SHAPE_REPRESENTATION('',(#1000)",
-       "#1009=ADVANCED_BREP_SHAPE_REPRESENTATION('',(#1000,#1030)", "GEOMETRIC_CURVE_SET"},
+       "#1009=ADVANCED_BREP_SHAPE_REPRESENTATION('',(#1000,#1030)", "COMPOSITE_CURVE"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.expect);
@@ -573,8 +639,10 @@ TEST(StepTranslateTest, UnsupportedConstructsAreNamed) {
     const size_t where = broken.find(c.from);
     ASSERT_NE(where, std::string::npos);
     broken.replace(where, c.from.size(), c.to);
-    if (c.expect == "GEOMETRIC_CURVE_SET")
-      broken.insert(broken.find("ENDSEC;\nEND-ISO"), "#1030=GEOMETRIC_CURVE_SET('',(#1));\n");
+    if (c.expect == "COMPOSITE_CURVE")
+      broken.insert(broken.find("ENDSEC;\nEND-ISO"),
+                    "#1030=GEOMETRIC_CURVE_SET('',(#1,#1031));\n"
+                    "#1031=COMPOSITE_CURVE('',(),.F.);\n");
     Result<Translated> ours = Translate(broken);
     ASSERT_TRUE(ours.ok()) << ours.status().ToString();
     EXPECT_FALSE(ours->supported);

@@ -17,6 +17,7 @@
 #include <TopoDS_Iterator.hxx>
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_LayerTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <algorithm>
 #include <cmath>
@@ -57,6 +58,23 @@ std::string ColorText(const Handle(XCAFDoc_ColorTool) & colors, const TDF_Label&
   return text;
 }
 
+// The layers a label is in, sorted, each with " (hidden)" when invisible.
+std::string LayerText(const Handle(XCAFDoc_LayerTool) & layers, const TDF_Label& label) {
+  TDF_LabelSequence layer_labels;
+  if (!layers->GetLayers(label, layer_labels) || layer_labels.IsEmpty()) return "";
+  std::vector<std::string> names;
+  for (const TDF_Label& layer : layer_labels) {
+    TCollection_ExtendedString name;
+    layers->GetLayer(layer, name);
+    names.push_back(std::string("'") + TCollection_AsciiString(name).ToCString() + "'" +
+                    (layers->IsVisible(layer) ? "" : " (hidden)"));
+  }
+  std::sort(names.begin(), names.end());
+  std::string text = " layers=";
+  for (size_t i = 0; i < names.size(); ++i) text += (i > 0 ? "," : "") + names[i];
+  return text;
+}
+
 std::string LocationText(const TopLoc_Location& location) {
   const gp_Trsf trsf = location.Transformation();
   std::string text = " at";
@@ -70,7 +88,8 @@ std::string LocationText(const TopLoc_Location& location) {
 }
 
 void DescribeLabel(const TDF_Label& label, const Handle(XCAFDoc_ShapeTool) & tool,
-                   const Handle(XCAFDoc_ColorTool) & colors, int depth,
+                   const Handle(XCAFDoc_ColorTool) & colors,
+                   const Handle(XCAFDoc_LayerTool) & layers, int depth,
                    std::vector<std::string>* lines) {
   std::string indent(2 * depth, ' ');
   if (depth > 64) {
@@ -82,22 +101,23 @@ void DescribeLabel(const TDF_Label& label, const Handle(XCAFDoc_ShapeTool) & too
     XCAFDoc_ShapeTool::GetReferredShape(label, referred);
     lines->push_back(indent + "instance '" + LabelName(label) + "'" +
                      LocationText(XCAFDoc_ShapeTool::GetLocation(label)) +
-                     ColorText(colors, label));
-    DescribeLabel(referred, tool, colors, depth + 1, lines);
+                     ColorText(colors, label) + LayerText(layers, label));
+    DescribeLabel(referred, tool, colors, layers, depth + 1, lines);
     return;
   }
   if (XCAFDoc_ShapeTool::IsAssembly(label)) {
-    lines->push_back(indent + "assembly '" + LabelName(label) + "'" + ColorText(colors, label));
+    lines->push_back(indent + "assembly '" + LabelName(label) + "'" + ColorText(colors, label) +
+                     LayerText(layers, label));
     TDF_LabelSequence components;
     XCAFDoc_ShapeTool::GetComponents(label, components);
     for (const TDF_Label& component : components)
-      DescribeLabel(component, tool, colors, depth + 1, lines);
+      DescribeLabel(component, tool, colors, layers, depth + 1, lines);
     return;
   }
   const TopoDS_Shape shape = XCAFDoc_ShapeTool::GetShape(label);
   lines->push_back(indent + "part '" + LabelName(label) + "' " +
                    (shape.IsNull() ? "null" : TopAbs::ShapeTypeToString(shape.ShapeType())) +
-                   ColorText(colors, label));
+                   ColorText(colors, label) + LayerText(layers, label));
   TDF_LabelSequence subs;
   XCAFDoc_ShapeTool::GetSubShapes(label, subs);
   if (subs.IsEmpty() || shape.IsNull()) return;
@@ -112,8 +132,11 @@ void DescribeLabel(const TDF_Label& label, const Handle(XCAFDoc_ShapeTool) & too
       what = "face " + std::to_string(faces.FindIndex(s));
     else if (!s.IsNull() && s.ShapeType() == TopAbs_SOLID)
       what = "solid " + std::to_string(solids.FindIndex(s));
-    sub_lines.push_back(indent + "  " + what + " '" + LabelName(sub) + "'" +
-                        ColorText(colors, sub));
+    // A sub-shape label that carries nothing (OCCT's GD&T and validation property reading
+    // make such labels for the faces they refer to) is left out.
+    const std::string attributes = ColorText(colors, sub) + LayerText(layers, sub);
+    if (attributes.empty() && !sub.IsAttribute(TDataStd_Name::GetID())) continue;
+    sub_lines.push_back(indent + "  " + what + " '" + LabelName(sub) + "'" + attributes);
   }
   std::sort(sub_lines.begin(), sub_lines.end());
   lines->insert(lines->end(), sub_lines.begin(), sub_lines.end());
@@ -181,7 +204,9 @@ ShapeSummary Summarize(const ReadShape& read, int threads) {
     Handle(XCAFDoc_ColorTool) colors = XCAFDoc_DocumentTool::ColorTool(read.doc->Main());
     TDF_LabelSequence free;
     tool->GetFreeShapes(free);
-    for (const TDF_Label& label : free) DescribeLabel(label, tool, colors, 0, &summary.document);
+    Handle(XCAFDoc_LayerTool) layers = XCAFDoc_DocumentTool::LayerTool(read.doc->Main());
+    for (const TDF_Label& label : free)
+      DescribeLabel(label, tool, colors, layers, 0, &summary.document);
   }
   return summary;
 }

@@ -24,7 +24,8 @@ struct ShapeSummary {
   std::array<double, 6> box{};  ///< BRepBndLib::AddOptimal, without tolerances
   bool has_box = false;
   /// The document as lines: every label under the free shapes with its kind (assembly,
-  /// instance with its placement, part), name, colours and coloured sub-shapes (by face index).
+  /// instance with its placement, part), name, colours, visibility and layers, and its
+  /// sub-shapes (faces by index) that have a name, a colour, a visibility or a layer.
   std::vector<std::string> document;
 };
 

@@ -1,6 +1,8 @@
 #include "model/step/topology.h"
 
+#include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepLib.hxx>
 #include <BRepLib_MakeEdge.hxx>
 #include <BRep_Builder.hxx>
@@ -62,6 +64,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 
 #include "core/parallel.h"
@@ -72,7 +75,8 @@ namespace rdmesh::step {
 bool IsBrepItem(const Entities& entities, const Instance& instance) {
   std::string_view type = entities.SimpleType(instance);
   return type == "MANIFOLD_SOLID_BREP" || type == "BREP_WITH_VOIDS" ||
-         type == "SHELL_BASED_SURFACE_MODEL";
+         type == "SHELL_BASED_SURFACE_MODEL" || type == "GEOMETRIC_CURVE_SET" ||
+         type == "GEOMETRIC_SET";
 }
 
 namespace {
@@ -88,6 +92,7 @@ class ItemBuilder {
 
  private:
   TopoDS_Shape Shell(uint64_t id, uint64_t from);
+  TopoDS_Shape CurveSet(const Entity& set);
   TopoDS_Face Face(uint64_t id, uint64_t from);
   TopoDS_Wire EdgeLoop(const Entity& bound, const TopoDS_Face& face,
                        const Handle(Geom_Surface) & surface, uint64_t surface_id, bool same_sense);
@@ -441,7 +446,7 @@ TopoDS_Wire ItemBuilder::EdgeLoop(const Entity& bound, const TopoDS_Face& face,
     TopoDS_Edge edge = Edge(ec);
     const bool same = ec.Logical(4);
     edge.Orientation(oe.orientation == same ? TopAbs_FORWARD : TopAbs_REVERSED);
-    bool is_seam = false, is_like_seam = false;
+    bool is_seam = false;
     const Instance& curve_instance = entities_.Get(ec.Ref(3), ec.id());
     std::string_view curve_type = entities_.SimpleType(curve_instance);
     if (curve_type == "SURFACE_CURVE" || curve_type == "SEAM_CURVE" ||
@@ -699,6 +704,8 @@ TopoDS_Shape ItemBuilder::Build() {
     else
       result = last;
     if (result.IsNull()) ThrowUnsupported(e.Name() + ": no shells");
+  } else if (type == "GEOMETRIC_CURVE_SET" || type == "GEOMETRIC_SET") {
+    result = CurveSet(e);
   } else {
     ThrowUnsupported(entities_.Describe(instance) + " as a B-rep");
   }
@@ -709,6 +716,49 @@ TopoDS_Shape ItemBuilder::Build() {
   }
   item_->curves.assign(curves_.begin(), curves_.end());
   return result;
+}
+
+// StepToTopoDS_Builder::Init(GeometricSet): a compound of an edge per curve, over the curve's
+// whole range (BRepBuilderAPI_MakeEdge), and a vertex per point; an element met again in the set
+// adds its shape again; an element OCCT cannot make an edge of is left out, as OCCT leaves it.
+TopoDS_Shape ItemBuilder::CurveSet(const Entity& set) {
+  // (name, elements)
+  static const std::set<std::string_view> kComposite = {
+      "COMPOSITE_CURVE", "COMPOSITE_CURVE_ON_SURFACE", "BOUNDARY_CURVE", "OUTER_BOUNDARY_CURVE"};
+  BRep_Builder builder;
+  TopoDS_Compound compound;
+  builder.MakeCompound(compound);
+  const Param& elements = set.List(1);
+  std::unordered_map<uint64_t, TopoDS_Shape> done;
+  for (uint32_t i = 0; i < elements.count; ++i) {
+    const Param& element_param = set.Item(elements, i);
+    if (element_param.kind != ParamKind::kRef)
+      ThrowUnsupported(set.Name() + ": an element that is not an entity");
+    const uint64_t element_id = element_param.value.ref;
+    if (auto found = done.find(element_id); found != done.end()) {
+      builder.Add(compound, found->second);
+      continue;
+    }
+    const Instance& element = entities_.Get(element_id, set.id());
+    std::string_view element_type = entities_.SimpleType(element);
+    TopoDS_Shape shape;
+    if (element_type == "CARTESIAN_POINT") {
+      shape = BRepBuilderAPI_MakeVertex(geometry_.Point(element_id, set.id(), units_)).Vertex();
+    } else if (kComposite.count(element_type) != 0) {
+      ThrowUnsupported(entities_.Describe(element) + " in a geometric set");
+    } else {
+      // Geometry::Curve throws Unsupported for what is no curve (surfaces, placements, ...).
+      Handle(Geom_Curve) curve = geometry_.Curve(element_id, set.id(), units_);
+      BRepBuilderAPI_MakeEdge make(curve, curve->FirstParameter(), curve->LastParameter());
+      if (make.IsDone()) shape = make.Edge();
+    }
+    if (shape.IsNull()) continue;
+    builder.Add(compound, shape);
+    done.emplace(element_id, shape);
+    item_->bound.emplace_back(element_id, shape);
+    item_->elements.push_back(element_id);
+  }
+  return compound;
 }
 
 // RecModif of ShapeProcess_ShapeContext: what each sub-shape (down to edges) became.
@@ -731,6 +781,7 @@ void RecordModifications(const TopoDS_Shape& shape, const Handle(ShapeBuild_ReSh
 
 void BuildItem(Geometry& geometry, BrepItem* item) {
   item->bound.clear();
+  item->elements.clear();
   try {
     OCC_CATCH_SIGNALS
     ItemBuilder builder(geometry, item);
@@ -1243,6 +1294,11 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
   }
   const ParallelRunner runner(threads);
   std::atomic<bool> stopped{false};
+  // An item with one face that cannot be merged is healed whole by HealItem: its other faces
+  // are not fixed in vain.
+  static const char* const kSkipped = "skipped";
+  const std::unique_ptr<std::atomic<bool>[]> refused(new std::atomic<bool>[items.size()]);
+  for (size_t i = 0; i < items.size(); ++i) refused[i] = false;
   runner.For(
       0, static_cast<int>(jobs.size()),
       [&](int j) {
@@ -1251,17 +1307,22 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
           return;
         }
         FaceJob* job = jobs[j].get();
+        if (refused[job->item_index].load()) {
+          job->failure = kSkipped;
+          return;
+        }
         try {
           OCC_CATCH_SIGNALS
           if (!CopyFace(job)) {
             job->failure = "located sub-shapes";
-            return;
+          } else {
+            FixFace(job);
+            job->failure = CheckMergeable(job, shared[job->item_index]);
           }
-          FixFace(job);
-          job->failure = CheckMergeable(job, shared[job->item_index]);
         } catch (...) {
           job->failure = "an exception";
         }
+        if (job->failure != nullptr) refused[job->item_index] = true;
       },
       Partition::kOnePerTask);
   stats.face_seconds = seconds();
@@ -1276,6 +1337,7 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
         for (FaceJob* job : item_jobs[i]) {
           if (job->failure == nullptr) continue;
           mergeable = false;
+          if (job->failure == kSkipped) continue;
           std::lock_guard<std::mutex> lock(refused_mutex);
           if (stats.refused.empty()) stats.refused = job->failure;
           break;

@@ -21,8 +21,9 @@
 
 namespace rdmesh::step {
 
-/// The representation items that make B-reps: MANIFOLD_SOLID_BREP, BREP_WITH_VOIDS,
-/// SHELL_BASED_SURFACE_MODEL.
+/// The representation items BuildItem makes shapes of: the B-reps MANIFOLD_SOLID_BREP,
+/// BREP_WITH_VOIDS, SHELL_BASED_SURFACE_MODEL, and the wireframes GEOMETRIC_CURVE_SET and
+/// GEOMETRIC_SET (of curves and points).
 bool IsBrepItem(const Entities& entities, const Instance& instance);
 
 /// One B-rep representation item, built and then healed.
@@ -40,6 +41,9 @@ struct BrepItem {
   /// Curve entities whose Geom curve this item's edges use (shared with other items through
   /// Geometry::SharedCurve): items sharing one are healed one after the other.
   std::vector<uint64_t> curves;
+  /// A curve set's elements (curves and points), bound to their edges and vertices in OCCT's
+  /// transfer process: one used elsewhere too (another set, an edge's curve) is not reproduced.
+  std::vector<uint64_t> elements;
 };
 
 /// Builds the raw shape of `item.id` (StepToTopoDS_Builder::Init). Throws Unsupported where

@@ -23,6 +23,7 @@
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DataMapOfShapeLabel.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_LayerTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <algorithm>
 #include <array>
@@ -72,6 +73,7 @@ enum class Kind : uint8_t {
   kOverridingStyledItem,
   kStyleContainer,  // MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION, DRAUGHTING_MODEL
   kInvisibility,
+  kLayerAssignment,  // PRESENTATION_LAYER_ASSIGNMENT
   kItemDefinedTransformation,
   kExternal,  // document references: OCCT would look for other files
 };
@@ -110,6 +112,7 @@ const std::unordered_map<std::string_view, Kind>& SimpleKinds() {
       {"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION", Kind::kStyleContainer},
       {"DRAUGHTING_MODEL", Kind::kStyleContainer},
       {"INVISIBILITY", Kind::kInvisibility},
+      {"PRESENTATION_LAYER_ASSIGNMENT", Kind::kLayerAssignment},
       {"ITEM_DEFINED_TRANSFORMATION", Kind::kItemDefinedTransformation},
       {"DOCUMENT_FILE", Kind::kExternal},
       {"APPLIED_DOCUMENT_REFERENCE", Kind::kExternal},
@@ -196,6 +199,7 @@ class Translator {
   TDF_Label AddShape(const TopoDS_Shape& shape, const Handle(XCAFDoc_ShapeTool) & tool);
   void ReadColors(const Handle(TDocStd_Document) & doc);
   void ReadNames(const Handle(TDocStd_Document) & doc);
+  void ReadLayers(const Handle(TDocStd_Document) & doc);
   bool DecodeColour(uint64_t colour, uint64_t from, Quantity_Color* color);
 
   void CheckStop() const {
@@ -776,10 +780,9 @@ TopoDS_Shape Translator::TransferShapeRep(uint64_t sr, bool* is_bound, bool use_
   const Param& items = rep.List(1);
   // Recognize: a representation transfers when one of its items is a shape.
   static const std::set<std::string_view> kShapeItems = {
-      "MANIFOLD_SOLID_BREP", "BREP_WITH_VOIDS", "SHELL_BASED_SURFACE_MODEL", "MAPPED_ITEM"};
+      "MANIFOLD_SOLID_BREP", "BREP_WITH_VOIDS",     "SHELL_BASED_SURFACE_MODEL",
+      "MAPPED_ITEM",         "GEOMETRIC_CURVE_SET", "GEOMETRIC_SET"};
   static const std::set<std::string_view> kUnsupportedItems = {"FACETED_BREP",
-                                                               "GEOMETRIC_SET",
-                                                               "GEOMETRIC_CURVE_SET",
                                                                "FACE_SURFACE",
                                                                "ADVANCED_FACE",
                                                                "EDGE_BASED_WIREFRAME_MODEL",
@@ -920,6 +923,17 @@ void Translator::BuildItems(std::vector<std::pair<std::string, double>>* stage_s
   }
   bool shared = false;
   for (const auto& [curve, users] : curve_users) shared = shared || users > 1;
+  // A curve set's elements are bound to shapes in OCCT's transfer process, where edges bind
+  // their curves and other sets look their elements up: an element used so twice is not
+  // reproduced.
+  std::unordered_set<uint64_t> elements;
+  for (auto& item : items_) {
+    for (uint64_t element : item->elements) {
+      if (curve_users.count(element) != 0 || !elements.insert(element).second)
+        ThrowUnsupported(entities_.Describe(entities_.Get(element, item->id)) +
+                         ": an element of a geometric set used elsewhere too");
+    }
+  }
   stage_seconds->emplace_back("build", Since(stage));
   stage = Clock::now();
   if (shared) {
@@ -1044,6 +1058,46 @@ void Translator::ReadNames(const Handle(TDocStd_Document) & doc) {
       if (label.IsNull()) continue;
       TDataStd_Name::Set(label, TCollection_ExtendedString(name.c_str(), Standard_True));
     }
+  }
+}
+
+// STEPCAFControl_Reader::ReadLayers: each PRESENTATION_LAYER_ASSIGNMENT whose items were
+// transferred becomes a layer (invisible when an INVISIBILITY names it) holding their labels;
+// an item that is a sub-shape of a part gets a sub-shape label.
+void Translator::ReadLayers(const Handle(TDocStd_Document) & doc) {
+  std::unordered_set<uint64_t> invisible;
+  bool any = false;
+  for (uint32_t index : order_) {
+    if (kinds_[index] == Kind::kLayerAssignment) any = true;
+    if (kinds_[index] != Kind::kInvisibility) continue;
+    Entity inv = entities_.Simple(file_.instances[index]);
+    const Param& items = inv.List(0);
+    for (uint32_t i = 0; i < items.count; ++i)
+      if (inv.Item(items, i).kind == ParamKind::kRef) invisible.insert(inv.RefItem(items, i));
+  }
+  if (!any) return;
+  Handle(XCAFDoc_ShapeTool) tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+  Handle(XCAFDoc_LayerTool) layers = XCAFDoc_DocumentTool::LayerTool(doc->Main());
+  for (uint32_t index : order_) {
+    if (kinds_[index] != Kind::kLayerAssignment) continue;
+    // (name, description, assigned_items)
+    const Instance& instance = file_.instances[index];
+    Entity layer = entities_.Simple(instance);
+    if (layer.IsUnset(2)) continue;
+    const bool visible = invisible.count(instance.id) == 0;
+    const TCollection_ExtendedString name(layer.String(0).c_str(), Standard_True);
+    TDF_Label layer_label;
+    const Param& items = layer.List(2);
+    for (uint32_t i = 0; i < items.count; ++i) {
+      if (layer.Item(items, i).kind != ParamKind::kRef) continue;
+      const TopoDS_Shape shape = Bound(layer.RefItem(items, i));
+      if (shape.IsNull()) continue;
+      TDF_Label label;
+      if (!tool->Search(shape, label, Standard_True, Standard_True, Standard_True)) continue;
+      if (layer_label.IsNull()) layer_label = layers->AddLayer(name, visible);
+      layers->SetLayer(label, layer_label);
+    }
+    if (!layer_label.IsNull()) layers->SetVisibility(layer_label, visible);
   }
 }
 
@@ -1270,6 +1324,7 @@ void Translator::BuildDocument(const std::vector<TopoDS_Shape>& root_shapes, Rea
   for (const TopoDS_Shape& shape : root_shapes) AddShape(shape, tool);
   ReadColors(doc);
   ReadNames(doc);
+  ReadLayers(doc);
   tool->UpdateAssemblies();
   read->doc = doc;
   read->shape = FreeShapesCompound(doc);
