@@ -246,8 +246,10 @@ class FaceRun {
       KeepIfBetter(&folded, settle_rounds_, std::min(job_.max_triangles, cap), true);
     }
     // Before refining a stuck mesh again from itself (which can multiply its triangles without
-    // getting anywhere): a first triangulation that follows the surface's turn.
-    if (Stuck()) {
+    // getting anywhere): a first triangulation that follows the surface's turn. Not on a plane,
+    // which does not turn: there it only costs seconds (four stuck planar faces of
+    // BarrelJack_CUI_PJ-063AH took 13 s for the same mesh).
+    if (Stuck() && !surface_->planar) {
       WorkMesh start;
       const size_t max_seeds =
           std::max<size_t>(kTurnStartMinSeeds, kTurnStartSeedFactor * domain_.uv.size());
