@@ -13,12 +13,19 @@
 //    "occt_seconds": s, "occt_error": "...", "ours_error": "..."}
 // and a last line {"summary": ...}: files, supported and equivalent fractions, the geometric mean
 // of ours/OCCT seconds over equivalent files and their total seconds.
+// OCC_CATCH_SIGNALS below turns a fault inside OCCT into an exception, as in the engine's reads
+// (model_readers' ScopedOcctFaultHandlers); it has to be defined before any OCCT header.
+#define OCC_CONVERT_SIGNALS 1
+
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <OSD.hxx>
+#include <Standard_ErrorHandler.hxx>
+#include <Standard_Failure.hxx>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -96,7 +103,13 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
     start = Clock::now();
     rdmesh::step::TranslateOptions translate_options;
     translate_options.threads = options.threads;
-    ours = rdmesh::step::TranslateStep(*file, translate_options, nullptr);
+    try {
+      OCC_CATCH_SIGNALS
+      ours = rdmesh::step::TranslateStep(*file, translate_options, nullptr);
+    } catch (const Standard_Failure& failure) {
+      ours = rdmesh::Status(rdmesh::StatusCode::kInternal,
+                            std::string("OCCT failure: ") + failure.DynamicType()->Name());
+    }
     translate_s = Since(start);
     if (!ours.ok()) ours_error = ours.status().message();
   };
@@ -234,6 +247,9 @@ bool Flag(const std::string& line, const std::string& key) {
 int main(int argc, char** argv) {
   // The engine reads STEP with rdmesh's own reader by default; the comparison is against OCCT's.
   setenv("RDMESH_STEP_READER", "occt", 1);
+  // Faults inside OCCT become exceptions, for our read as for the engine's (OCCT's healing can
+  // fault on broken geometry; its own OCC_CATCH_SIGNALS blocks then recover).
+  OSD::SetSignal(OSD_SignalMode_Set, /*theFloatingSignal=*/false);
   Options options;
   std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {

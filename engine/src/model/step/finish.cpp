@@ -1,3 +1,8 @@
+// OCC_CATCH_SIGNALS below must turn faults inside OCCT's modelling classes into exceptions, in
+// TBB's worker threads too, when the caller has OCCT's fault handlers installed (model_readers'
+// ScopedOcctFaultHandlers); it has to be defined before any OCCT header.
+#define OCC_CONVERT_SIGNALS 1
+
 #include "model/step/finish.h"
 
 #include <Adaptor3d_CurveOnSurface.hxx>

@@ -2,6 +2,11 @@
 // STEPControl_ActorRead (which items become shapes, in which unit context, placed where), the
 // B-rep items built and healed (topology.h), and the XCAF document of STEPCAFControl_Reader
 // (shapes, assembly structure, names, colours).
+// OCC_CATCH_SIGNALS below must turn faults inside OCCT's modelling classes into exceptions, in
+// TBB's worker threads too, when the caller has OCCT's fault handlers installed (model_readers'
+// ScopedOcctFaultHandlers); it has to be defined before any OCCT header.
+#define OCC_CONVERT_SIGNALS 1
+
 #include "model/step/translate.h"
 
 #include <BRepLib.hxx>

@@ -50,7 +50,10 @@ struct Translated {
 /// is not in the file") when the file is broken where OCCT's reader would refuse it too (a
 /// dangling reference from geometry or topology, a reference cycle, a file with no shapes);
 /// supported = false (never an error) for what it does not handle; the context's StopStatus()
-/// when stopped. Untrusted input: never crashes, memory bounded by the file's size. Not
+/// when stopped. Untrusted input: memory bounded by the file's size; OCCT's healing can fault
+/// on broken geometry (as in OCCT's own reader), so callers install OCCT's fault handlers
+/// (OSD::SetSignal, as model_readers' ScopedOcctFaultHandlers does): a fault then ends as
+/// OCCT's reader would end it, or as supported = false, never a crash. Not
 /// thread-safe with OCCT's own STEP reader only where OCCT's healing shares globals, which this
 /// initialises before going parallel: callers may run it alongside other engine work.
 Result<Translated> TranslateStep(const File& file, const TranslateOptions& options,
