@@ -97,6 +97,15 @@ class ScopedOcctFaultHandlers {
   struct sigaction saved_[kSignals] = {};
 };
 
+// Runs one call into OCCT's readers under its own OCC_CATCH_SIGNALS. A fault inside lands here and
+// leaves as a Standard_Failure thrown from this frame, so the caller's objects unwind normally; the
+// handler in ReadModelBytes alone would longjmp over the caller's frame and leak what it holds.
+template <typename Call>
+auto GuardFaults(Call&& call) -> decltype(call()) {
+  OCC_CATCH_SIGNALS
+  return call();
+}
+
 // Lets a Context stop an OCCT transfer: OCCT polls UserBreak() between entities.
 class StopIndicator : public Message_ProgressIndicator {
  public:
@@ -297,7 +306,8 @@ Status CheckReferences(XSControl_Reader& reader, const FatalChecks& fatal,
                        const std::string& name) {
   Handle(Interface_InterfaceModel) model = reader.WS()->Model();
   if (model.IsNull()) return Status::Ok();
-  Interface_CheckIterator checks = reader.WS()->ModelCheckList(/*complete=*/false);
+  Interface_CheckIterator checks =
+      GuardFaults([&] { return reader.WS()->ModelCheckList(/*complete=*/false); });
   int broken = 0;
   std::string first;
   for (checks.Start(); checks.More(); checks.Next()) {
@@ -327,7 +337,7 @@ Status ParseStep(const std::string& bytes, const std::string& name, XSControl_Re
   if (!crash.empty()) return ParseError(name, crash + " (OCCT's reader would crash or hang on it)");
   MemoryStreamBuffer buffer(bytes);
   std::istream stream(&buffer);
-  if (reader.ReadStream(name.c_str(), stream) != IFSelect_RetDone)
+  if (GuardFaults([&] { return reader.ReadStream(name.c_str(), stream); }) != IFSelect_RetDone)
     return ParseError(name, "not a valid STEP file (the parser failed)");
   return CheckReferences(reader, kStepChecks, name);
 }
@@ -398,16 +408,16 @@ Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
   read.stages.emplace_back("occt_parse", SecondsSince(start));
   start = std::chrono::steady_clock::now();
   TColStd_SequenceOfAsciiString lengths, angles, solid_angles;
-  reader.ChangeReader().FileUnits(lengths, angles, solid_angles);
+  GuardFaults([&] { reader.ChangeReader().FileUnits(lengths, angles, solid_angles); });
   SetUnit(&read, lengths.IsEmpty() ? "MILLIMETRE" : lengths.First().ToCString());
 
   read.doc = NewXcafDocument();
   Handle(StopIndicator) indicator = new StopIndicator(context);
-  if (!reader.Transfer(read.doc, indicator->Start())) {
+  if (!GuardFaults([&] { return reader.Transfer(read.doc, indicator->Start()); })) {
     if (context != nullptr && context->ShouldStop()) return context->StopStatus();
     return ParseError(name, "the STEP translator could not transfer the shapes");
   }
-  read.shape = FreeShapesCompound(read.doc);
+  read.shape = GuardFaults([&] { return FreeShapesCompound(read.doc); });
   read.stages.emplace_back("occt_transfer", SecondsSince(start));
   read.reader = "occt";
   read.reader_note = fallback;
@@ -450,7 +460,7 @@ Result<ReadShape> ReadIges(const std::string& bytes, const std::string& path,
   reader.SetColorMode(true);
   reader.SetNameMode(true);
   reader.SetLayerMode(true);
-  if (reader.ReadFile(file.c_str()) != IFSelect_RetDone)
+  if (GuardFaults([&] { return reader.ReadFile(file.c_str()); }) != IFSelect_RetDone)
     return ParseError(name, "not a valid IGES file (the parser failed)");
   Status references = CheckReferences(reader, kIgesChecks, name);
   if (!references.ok()) return references;
@@ -475,11 +485,11 @@ Result<ReadShape> ReadIges(const std::string& bytes, const std::string& path,
 
   read.doc = NewXcafDocument();
   Handle(StopIndicator) indicator = new StopIndicator(context);
-  if (!reader.Transfer(read.doc, indicator->Start())) {
+  if (!GuardFaults([&] { return reader.Transfer(read.doc, indicator->Start()); })) {
     if (context != nullptr && context->ShouldStop()) return context->StopStatus();
     return ParseError(name, "the IGES translator could not transfer the shapes");
   }
-  read.shape = FreeShapesCompound(read.doc);
+  read.shape = GuardFaults([&] { return FreeShapesCompound(read.doc); });
   return read;
 }
 
@@ -490,7 +500,7 @@ Result<ReadShape> ReadBrep(const std::string& bytes, const std::string& name,
   std::istream stream(&buffer);
   BRep_Builder builder;
   Handle(StopIndicator) indicator = new StopIndicator(context);
-  BRepTools::Read(read.shape, stream, builder, indicator->Start());
+  GuardFaults([&] { BRepTools::Read(read.shape, stream, builder, indicator->Start()); });
   if (context != nullptr && context->ShouldStop()) return context->StopStatus();
   if (read.shape.IsNull()) return ParseError(name, "not a valid BREP file (no shape)");
   return read;
