@@ -10,8 +10,9 @@
 # modules the pytest suites import (gmsh, meshio, numpy, grpc, protobuf, matplotlib), the programs
 # they call (openssl, nginx, protoc with the Python gRPC plugin, FreeCAD's freecadcmd, node and
 # npm for the glTF validator and three.js, whose npm packages tests/cli installs under the build
-# tree on first use) and the sanitizer runtimes of the ASan/UBSan and TSan builds (gcc's, pulled
-# in by build-essential).
+# tree on first use, and chromium for the viewer page, whose npm packages (clients/web's
+# package.json) tests/web installs under the build tree) and the sanitizer runtimes of the
+# ASan/UBSan and TSan builds (gcc's, pulled in by build-essential).
 set -euo pipefail
 
 mode=${1:-build}
@@ -20,6 +21,8 @@ runtime_pkgs=(
   libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev
   libocct-foundation-dev libocct-ocaf-dev libocct-visualization-dev
   libgrpc++-dev libprotobuf-dev libspdlog-dev libtbb-dev libtcmalloc-minimal4
+  # meshoptimizer 0.18: the compressed .glb (rdmesh mesh --compress, engine/src/writers).
+  libmeshoptimizer-dev
   python3-grpcio python3-protobuf python3-numpy python3-meshio python3-tqdm
 )
 build_pkgs=(
@@ -39,6 +42,8 @@ build_pkgs=(
   # rdmesh-py view draws with matplotlib (Agg, no display); tests/python/test_freecad.py runs
   # the FreeCAD client (clients/freecad) in Debian's FreeCAD 0.20 (freecadcmd, headless).
   python3-matplotlib freecad
+  # tests/web drives the viewer page (clients/web) in headless Chromium.
+  chromium
 )
 # Programs the tests need that may come from elsewhere: the machine's own Node.js build ships
 # npm and conflicts with Debian's npm package, so these are installed only when the command is

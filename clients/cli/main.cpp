@@ -163,6 +163,10 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
         flags, kExitUsage,
         Status(StatusCode::kInvalidArgument,
                "cannot write '" + output + "': unknown output format (use one of" + formats + ")"));
+  if (mesh_flags.write.compress && extension != ".glb")
+    return Fail(flags, kExitUsage,
+                Status(StatusCode::kInvalidArgument,
+                       "--compress writes .glb only (the output is '" + output + "')"));
 
   Context context;
   g_interrupt_context = &context;

@@ -25,7 +25,8 @@ struct MeshFlags {
 
 /// Adds --max-deviation, --max-deviation-rel, --rd-tolerance, --max-triangles,
 /// --min-edge-length, --max-edge-length, --nurbs, --threads, --faces and --timeout, and the
-/// output flags --edges/--no-edges and --msh-parametric, to `app`, each bound to `flags` and
+/// output flags --edges/--no-edges, --msh-parametric and --compress (which also sets
+/// MeshOptions::compress), to `app`, each bound to `flags` and
 /// documented with its unit and default.
 void AddMeshFlags(CLI::App* app, MeshFlags* flags);
 

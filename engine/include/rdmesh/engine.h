@@ -79,6 +79,13 @@ struct WriteOptions {
   /// out) as line elements along its shared edge grid (.glb: LINES primitives with _EDGE_ID).
   /// The other formats ignore it.
   bool edges = true;
+  /// .glb: compress it (EXT_meshopt_compression with KHR_mesh_quantization, docs/GLB.md):
+  /// positions rounded to a grid that moves no vertex farther than kCompressRoundingShare of
+  /// MeshSummary::requested_deviation (a mesh made with MeshOptions::compress keeps its
+  /// deviation; none requested: no rounding), octahedral normals, vertex and index order
+  /// optimised for the GPU, the ids and the edge table compressed too. The other formats ignore
+  /// it.
+  bool compress = false;
 };
 
 /// Writes the assembled mesh; the extension picks the format: .msh (MSH 4.1 ASCII), .stl

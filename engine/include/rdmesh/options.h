@@ -12,6 +12,12 @@ namespace rdmesh {
 /// MeshOptions::max_deviation_rel when it is not set.
 inline constexpr double kDefaultMaxDeviationRel = 1e-3;
 
+/// The share of the deviation a compressed .glb's position rounding may use
+/// (MeshOptions::compress, WriteOptions::compress): the run meshes to (1 - share) of the
+/// deviation and the writer moves no vertex farther than share times it, so the sum stays within
+/// the request.
+inline constexpr double kCompressRoundingShare = 0.015;
+
 /// What a meshing run should reach. A plain struct: every field has a usable default.
 /// Lengths are in model units (OCCT reads STEP in millimetres).
 struct MeshOptions {
@@ -45,6 +51,11 @@ struct MeshOptions {
   /// [0, 180]) is sharp. It changes no triangle or node. (The service carries it as
   /// MeshOptions.sharp_edge_angle; the CLI has no flag for it and writes the default.)
   double sharp_edge_angle = kDefaultSharpEdgeAngle;
+  /// The mesh is for a compressed .glb (WriteOptions::compress): the run meshes to
+  /// (1 - kCompressRoundingShare) of the deviation, leaving the rest to the writer's rounding of
+  /// positions; MeshSummary::requested_deviation still reports the whole deviation. Needs a
+  /// deviation (max_deviation or max_deviation_rel) and no max_triangles budget.
+  bool compress = false;
 };
 
 /// The relative deviation a run uses: max_deviation_rel, or its default when unset.

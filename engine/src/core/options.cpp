@@ -35,6 +35,10 @@ Status ValidateOptions(const MeshOptions& o) {
     return InvalidArgument("timeout_seconds must be >= 0");
   if (!Finite(o.sharp_edge_angle) || o.sharp_edge_angle < 0 || o.sharp_edge_angle > 180)
     return InvalidArgument("sharp_edge_angle must lie in [0, 180] degrees");
+  if (o.compress && (o.max_triangles > 0 || (o.max_deviation == 0 && rel == 0)))
+    return InvalidArgument(
+        "compress needs a max deviation (absolute or relative) and no triangle budget: its "
+        "position rounding is a share of that deviation");
   for (int id : o.face_ids)
     if (id < 1) return InvalidArgument("face_ids start at 1 (got " + std::to_string(id) + ")");
   if (o.max_deviation == 0 && rel == 0 && o.rd_tolerance == 0 && o.max_edge_length == 0 &&

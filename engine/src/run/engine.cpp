@@ -26,6 +26,14 @@ Result<MeshResult> MeshModelWith(const Model& model, const MeshOptions& options,
   if (options.timeout_seconds > 0) context->SetTimeout(options.timeout_seconds);
   double deviation = options.max_deviation > 0 ? options.max_deviation
                                                : MaxDeviationRel(options) * model.info.diagonal;
+  if (options.max_triangles <= 0 && options.compress) {
+    // The writer's rounding of positions takes its share of the deviation (options.h).
+    Result<MeshResult> result =
+        MeshAtDeviation(model, options, deviation * (1.0 - kCompressRoundingShare), context,
+                        surfaces, RunOutput::kMeshAndEdgeLines);
+    if (result.ok()) result->summary.requested_deviation = deviation;
+    return result;
+  }
   if (options.max_triangles <= 0)
     return MeshAtDeviation(model, options, deviation, context, surfaces,
                            RunOutput::kMeshAndEdgeLines);

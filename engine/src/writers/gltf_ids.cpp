@@ -17,6 +17,8 @@
 #include <sstream>
 #include <utility>
 
+#include "rdmesh/options.h"
+#include "writers/gltf_compress.h"
 #include "writers/output_file.h"
 
 namespace rdmesh {
@@ -429,7 +431,8 @@ void EdgeNodes(Glb* glb, const Model& model, const Mesh& mesh, const std::vector
 }  // namespace
 
 Status AddGltfIdsAndEdges(const Model& model, const MeshResult& result,
-                          const std::vector<EdgeLine>& edges, const std::string& path) {
+                          const std::vector<EdgeLine>& edges, bool compress,
+                          const std::string& path) {
   const Mesh& mesh = result.mesh;
   Result<Glb> read = ReadGlbFile(path);
   if (!read.ok()) return read.status();
@@ -453,6 +456,20 @@ Status AddGltfIdsAndEdges(const Model& model, const MeshResult& result,
        "which have no line"},
       {"normals", "NORMAL is the exact surface normal of the vertex's face at the vertex"}};
   if (!edges.empty()) glb.json["extras"]["rdmesh"]["degenerate_edges"] = degenerate;
+  if (compress) {
+    glb.json["extras"]["rdmesh"]["compressed"] =
+        "EXT_meshopt_compression with KHR_mesh_quantization (docs/GLB.md): positions on a grid "
+        "that moves no vertex farther than rdmesh's share of requested_deviation (model units); "
+        "an edges primitive's extras.edge_table holds its edges as accessors (id, flags: bit 0 "
+        "seam, bit 1 sharp, bits 8-15 face count, dihedral, faces: the concatenated face ids); "
+        "faces.surface_type per face id (byte f - 1) indexes faces.surface_types; a triangle "
+        "primitive's extras.triangle_deviation per triangle is its estimated deviation in 1/250 "
+        "of requested_deviation";
+    // Model units are mm and glTF's are metres (WriteGlb).
+    const double max_shift = kCompressRoundingShare * result.summary.requested_deviation * 1e-3;
+    Status compressed = CompressGlb(model, result, max_shift, path, &glb.json, &glb.bin);
+    if (!compressed.ok()) return compressed;
+  }
   return WriteGlbFile(path, glb);
 }
 

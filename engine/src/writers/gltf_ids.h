@@ -22,8 +22,12 @@ namespace rdmesh {
 ///   with a mesh of one LINES primitive: every edge line that is not degenerate, in edge id
 ///   order, as segments over vertices of its own, each with `_EDGE_ID` (a float: the edge id
 ///   1..E). The primitive's extras list its edges with their faces and seam / sharp flags.
-/// The root's `extras.rdmesh` explains both attributes. kIoError naming the path on failure.
+/// The root's `extras.rdmesh` explains both attributes. With `compress`, CompressGlb
+/// (gltf_compress.h) then compresses the file, rounding positions by at most
+/// kCompressRoundingShare of the result's requested deviation. kIoError naming the path on
+/// failure.
 Status AddGltfIdsAndEdges(const Model& model, const MeshResult& result,
-                          const std::vector<EdgeLine>& edges, const std::string& path);
+                          const std::vector<EdgeLine>& edges, bool compress,
+                          const std::string& path);
 
 }  // namespace rdmesh

@@ -12,7 +12,7 @@
 namespace rdmesh {
 
 Status WriteGlb(const Model& model, const MeshResult& result, const std::vector<EdgeLine>& edges,
-                const std::string& path) {
+                bool compress, const std::string& path) {
   try {
     Handle(TDocStd_Document) doc = DocumentForWriting(model);
     ScopedFaceTriangulations lent(model, result, /*uv_face_ids=*/true);
@@ -30,7 +30,7 @@ Status WriteGlb(const Model& model, const MeshResult& result, const std::vector<
   } catch (const Standard_Failure& failure) {
     return WriteError(path, std::string("the glTF writer failed: ") + failure.GetMessageString());
   }
-  return AddGltfIdsAndEdges(model, result, edges, path);
+  return AddGltfIdsAndEdges(model, result, edges, compress, path);
 }
 
 }  // namespace rdmesh

@@ -16,8 +16,9 @@ namespace rdmesh {
 /// instance class; NORMAL is each face's exact surface normal at its own copy of the node.
 /// Then AddGltfIdsAndEdges gives every triangle vertex its face id (_FACE_ID) and, when `edges`
 /// is not empty, adds the edge lines (LINES primitives with _EDGE_ID). kIoError naming the path
-/// on failure. Thread-safe; writers that lend triangulations to the model run one at a time.
+/// on failure. With `compress` the file is compressed (WriteOptions::compress, gltf_compress.h).
+/// Thread-safe; writers that lend triangulations to the model run one at a time.
 Status WriteGlb(const Model& model, const MeshResult& result, const std::vector<EdgeLine>& edges,
-                const std::string& path);
+                bool compress, const std::string& path);
 
 }  // namespace rdmesh

@@ -64,7 +64,7 @@ Status Dispatch(const Model& model, const MeshResult& result, const std::vector<
   if (ext == ".obj") return WriteObj(model, result, edges, path);
   if (ext == ".ply") return WritePly(result, path);
   if (ext == ".vtu") return WriteVtu(result, path);
-  if (ext == ".glb") return WriteGlb(model, result, edges, path);
+  if (ext == ".glb") return WriteGlb(model, result, edges, options.compress, path);
   std::string supported;
   for (const std::string& format : SupportedOutputFormats())
     supported += (supported.empty() ? "" : ", ") + format;
