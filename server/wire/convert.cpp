@@ -33,6 +33,7 @@ MeshOptions FromProto(const pb::MeshOptions& in) {
   out.threads = in.threads();
   out.timeout_seconds = in.timeout_seconds();
   if (in.has_sharp_edge_angle()) out.sharp_edge_angle = in.sharp_edge_angle();
+  out.compress = in.compress();
   out.face_ids.assign(in.face_ids().begin(), in.face_ids().end());
   return out;
 }
@@ -49,6 +50,7 @@ pb::MeshOptions ToProto(const MeshOptions& in) {
   out.set_threads(in.threads);
   out.set_timeout_seconds(in.timeout_seconds);
   out.set_sharp_edge_angle(in.sharp_edge_angle);
+  out.set_compress(in.compress);
   for (int id : in.face_ids) out.add_face_ids(id);
   return out;
 }

@@ -21,7 +21,7 @@ MODEL_HEADER = "x-rdmesh-model"
 _MODEL_ID = re.compile(r"^[0-9a-f]{64}$")
 _OPTION_NAMES = {"max_deviation", "max_deviation_rel", "rd_tolerance", "max_triangles",
                  "min_edge_length", "max_edge_length", "nurbs", "threads", "face_ids",
-                 "timeout_seconds", "sharp_edge_angle"}
+                 "timeout_seconds", "sharp_edge_angle", "compress"}
 _STAGES = {pb.STAGE_LOADING: "loading", pb.STAGE_EDGES: "edges", pb.STAGE_FACES: "faces",
            pb.STAGE_ASSEMBLY: "assembly", pb.STAGE_DONE: "done"}
 _FACE_STATUS = {pb.FACE_STATUS_OK: "ok", pb.FACE_STATUS_FAILED: "failed",
@@ -334,8 +334,10 @@ class Client:
         """Meshes a model (see info() for what `model` may be) and returns per-face numpy arrays
         plus the assembled watertight mesh. Options are those of MeshOptions:
         max_deviation, max_deviation_rel, rd_tolerance, max_triangles, min_edge_length,
-        max_edge_length, nurbs, threads, face_ids, timeout_seconds, sharp_edge_angle.
-        `progress` is called with a Progress as the run advances. `timeout` is the call's
+        max_edge_length, nurbs, threads, face_ids, timeout_seconds, sharp_edge_angle, compress
+        (the mesh is for a compressed .glb: meshed to 98.5% of the deviation, leaving the rest to
+        the writer's rounding of positions, as `rdmesh mesh --compress` asks; the summary's
+        requested deviation stays the whole one). `progress` is called with a Progress as the run advances. `timeout` is the call's
         deadline in seconds. With `edges`, MeshResult.edges holds every B-rep edge as a
         polyline over the assembled mesh's nodes (Edges). With `triangle_deviation`, every
         FaceResult and the MeshResult carry each triangle's estimated deviation."""
