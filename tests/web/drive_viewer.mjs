@@ -3,8 +3,9 @@
 //   node --experimental-websocket drive_viewer.mjs CHROMIUM PAGE_URL SCREENSHOT.png PIXELS_JSON
 // Waits for the page's levels to load, then prints one JSON line: the page's stats after each
 // level, its stats now, for each pixel [x, y] of PIXELS_JSON the ray through it and what the
-// page picks there, the stats with edges hidden, and the deviation toggle's stats; saves a
-// screenshot of the loaded page (edges shown) to SCREENSHOT.png.
+// page picks there, the hover label with the mouse over the first pixel, the stats with edges
+// hidden, and the deviation toggle's stats; saves a screenshot of the loaded page (edges shown,
+// the mouse over the first pixel) to SCREENSHOT.png.
 import { spawn } from 'child_process';
 import fs from 'fs';
 import os from 'os';
@@ -25,7 +26,12 @@ const browser = spawn(chromium, [
 function finish(code, message) {
   if (message) console.error(message);
   browser.on('exit', () => {
-    fs.rmSync(profile, { recursive: true, force: true });
+    // Chromium's helper processes may still be writing to the profile for a moment.
+    try {
+      fs.rmSync(profile, { recursive: true, force: true, maxRetries: 10, retryDelay: 100 });
+    } catch (error) {
+      console.error(`left ${profile}: ${error.message}`);
+    }
     process.exit(code);
   });
   browser.kill('SIGKILL');
@@ -98,6 +104,10 @@ const picks = [];
 for (const [x, y] of pixels)
   picks.push({ pixel: [x, y], ray: await evaluate(`rdmeshViewer.ray(${x}, ${y})`),
                pick: await evaluate(`rdmeshViewer.pick(${x}, ${y})`) });
+// The mouse over the first pixel, so the screenshot shows what hovering there reports.
+if (pixels.length)
+  await send('Input.dispatchMouseEvent', { type: 'mouseMoved', x: pixels[0][0], y: pixels[0][1] });
+const hover = await evaluate("document.getElementById('hover').textContent");
 const shot = await send('Page.captureScreenshot', { format: 'png' });
 fs.writeFileSync(screenshot, Buffer.from(shot.result.data, 'base64'));
 await evaluate('rdmeshViewer.setEdges(false)');
@@ -105,5 +115,5 @@ const noEdges = await evaluate('rdmeshViewer.stats()');
 await evaluate('rdmeshViewer.setEdges(true)');
 await evaluate('rdmeshViewer.setDeviation(true)');
 const deviation = await evaluate('rdmeshViewer.stats()');
-console.log(JSON.stringify({ levels, stats, picks, noEdges, deviation, console: consoleLines }));
+console.log(JSON.stringify({ levels, stats, picks, hover, noEdges, deviation, console: consoleLines }));
 finish(0);

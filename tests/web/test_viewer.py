@@ -201,7 +201,7 @@ def test_viewer_in_chromium(site, server, chromium, tmp_path):
 
     screenshot = tmp_path / "viewer.png"
     width, height = VIEWPORT
-    pixels = [(width // 2 + dx, height // 2 + dy) for dx in (-60, 0, 60) for dy in (-40, 0, 40)]
+    pixels = [(width // 2 + dx, height // 2 + dy) for dx in (0, -60, 60) for dy in (0, -40, 40)]
     result = drive(chromium, f"{server}/index.html?url=model.glb", screenshot, pixels)
     assert not result["console"], result["console"]
     stats = result["stats"]
@@ -228,6 +228,9 @@ def test_viewer_in_chromium(site, server, chromium, tmp_path):
         assert entry["pick"]["surfaceType"] == surface[expected]
         checked += 1
     assert checked >= 3, result["picks"]
+    # Hovering the first pixel (the centre) names its face and surface type.
+    first = result["picks"][0]["pick"]
+    assert result["hover"].startswith(f"face {first['face']} · {first['surfaceType']}")
 
     # The screenshot shows the model: many pixels away from the background, several colours
     # (the red cube, the blue cylinder, dark edges).

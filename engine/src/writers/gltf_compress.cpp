@@ -258,16 +258,17 @@ int AddIdAttribute(Builder* out, const std::vector<double>& ids) {
 }
 
 struct Primitive {
-  Json* json = nullptr;  // the primitive in the source JSON
+  Json json;  // the primitive's JSON: material, mode, extras
   int mode = kTriangles;
   std::vector<uint32_t> indices;
   std::vector<double> position, normal, face_id, edge_id;
+  std::vector<double> colour;      // 3 per vertex (COLOR_0) when primitives were merged
   std::vector<uint8_t> deviation;  // per triangle; empty when unknown
 };
 
 // Reads a primitive of the plain file; false when it holds what the plain writer does not make.
-bool ReadPrimitive(const Json& json, const std::string& bin, Json* source, Primitive* p) {
-  p->json = source;
+bool ReadPrimitive(const Json& json, const std::string& bin, const Json* source, Primitive* p) {
+  p->json = *source;
   p->mode = source->value("mode", kTriangles);
   if (p->mode != kTriangles && p->mode != kLines) return false;
   int components = 0;
@@ -365,6 +366,112 @@ void Optimise(Primitive* p) {
   apply(&p->normal, 3);
   apply(&p->face_id, 1);
   apply(&p->edge_id, 1);
+  apply(&p->colour, 3);
+}
+
+// The colour (baseColorFactor) of a material, white when it has none.
+std::array<double, 4> MaterialColour(const Json& material) {
+  std::array<double, 4> c{1, 1, 1, 1};
+  if (material.contains("pbrMetallicRoughness") &&
+      material["pbrMetallicRoughness"].contains("baseColorFactor"))
+    for (int k = 0; k < 4; ++k)
+      c[k] = material["pbrMetallicRoughness"]["baseColorFactor"][k].get<double>();
+  return c;
+}
+
+// One mesh's triangle primitives merged into one when their materials differ in name and colour
+// alone (OCCT writes a primitive per colour): the colours go to COLOR_0, which the material
+// multiplies (its colour made white), so the file holds one set of accessors per mesh instead
+// of one per colour. Runs before Optimise, on primitives as read.
+void MergeByColour(Json* json, std::vector<Primitive>* prims) {
+  if (prims->size() < 2) return;
+  Json* materials = json->contains("materials") ? &(*json)["materials"] : nullptr;
+  auto material_of = [&](const Primitive& p) {
+    if (!materials || !p.json.contains("material")) return Json(Json::object());
+    return (*materials)[p.json["material"].get<int>()];
+  };
+  auto rest_of = [](Json material) {
+    material.erase("name");
+    if (material.contains("pbrMetallicRoughness"))
+      material["pbrMetallicRoughness"].erase("baseColorFactor");
+    return material;
+  };
+  const Primitive& first = prims->front();
+  const Json rest = rest_of(material_of(first));
+  const std::array<double, 4> first_colour = MaterialColour(material_of(first));
+  bool same_colour = true, deviation = true;
+  for (const Primitive& p : *prims) {
+    const Json material = material_of(p);
+    const std::array<double, 4> colour = MaterialColour(material);
+    if (p.mode != kTriangles || p.normal.empty() != first.normal.empty() ||
+        p.face_id.empty() != first.face_id.empty() || !p.edge_id.empty() ||
+        rest_of(material) != rest || material.value("alphaMode", "OPAQUE") != "OPAQUE" ||
+        colour[3] != first_colour[3])
+      return;
+    same_colour = same_colour && colour == first_colour;
+    deviation = deviation && !p.deviation.empty();
+  }
+  if (!materials && !same_colour) return;
+  Primitive merged;
+  merged.json = first.json;
+  for (const Primitive& p : *prims) {
+    const auto base = static_cast<uint32_t>(merged.position.size() / 3);
+    for (uint32_t i : p.indices) merged.indices.push_back(base + i);
+    merged.position.insert(merged.position.end(), p.position.begin(), p.position.end());
+    merged.normal.insert(merged.normal.end(), p.normal.begin(), p.normal.end());
+    merged.face_id.insert(merged.face_id.end(), p.face_id.begin(), p.face_id.end());
+    if (deviation)
+      merged.deviation.insert(merged.deviation.end(), p.deviation.begin(), p.deviation.end());
+    if (same_colour) continue;
+    const std::array<double, 4> colour = MaterialColour(material_of(p));
+    for (size_t v = 0; v < p.position.size() / 3; ++v)
+      merged.colour.insert(merged.colour.end(), colour.begin(), colour.begin() + 3);
+  }
+  if (!same_colour) {
+    Json material = material_of(first);
+    material["name"] = "rdmesh vertex colours";
+    material["pbrMetallicRoughness"]["baseColorFactor"] = {1.0, 1.0, 1.0, first_colour[3]};
+    auto found = std::find(materials->begin(), materials->end(), material);
+    merged.json["material"] = found - materials->begin();
+    if (found == materials->end()) materials->push_back(material);
+  }
+  if (merged.json.contains("extras")) {
+    merged.json["extras"].erase("triangle_deviation");
+    if (merged.json["extras"].empty()) merged.json.erase("extras");
+  }
+  prims->assign(1, std::move(merged));
+}
+
+// Leaves out the materials no primitive uses any more (merged ones) and renumbers the rest.
+void PruneMaterials(Json* json) {
+  if (!json->contains("materials") || !json->contains("meshes")) return;
+  Json& materials = (*json)["materials"];
+  std::vector<int> index(materials.size(), -1);
+  for (const Json& mesh : (*json)["meshes"])
+    for (const Json& p : mesh["primitives"])
+      if (p.contains("material")) index[p["material"].get<int>()] = 0;
+  Json kept = Json::array();
+  for (size_t i = 0; i < materials.size(); ++i)
+    if (index[i] == 0) {
+      index[i] = static_cast<int>(kept.size());
+      kept.push_back(materials[i]);
+    }
+  materials = std::move(kept);
+  for (Json& mesh : (*json)["meshes"])
+    for (Json& p : mesh["primitives"])
+      if (p.contains("material")) p["material"] = index[p["material"].get<int>()];
+}
+
+// COLOR_0: 16-bit normalized linear RGB (the materials' baseColorFactor, which is linear too).
+int AddColours(Builder* out, const std::vector<double>& colours) {
+  const size_t n = colours.size() / 3;
+  std::vector<uint16_t> raw(4 * n, 0);
+  for (size_t v = 0; v < n; ++v)
+    for (int c = 0; c < 3; ++c)
+      raw[4 * v + c] =
+          static_cast<uint16_t>(std::lround(std::clamp(colours[3 * v + c], 0.0, 1.0) * 65535));
+  Slice view = out->AddAttributeView(Bytes(raw), n, 8, "NONE", kArrayBuffer);
+  return out->AddAccessor(view, kUnsignedShort, n, "VEC3", true);
 }
 
 // How a mesh's positions are stored: integers q with position = (q + origin) * step.
@@ -575,16 +682,16 @@ Status CompressGlb(const Model& model, const MeshResult& result, double max_shif
     Json& meshes = (*json)["meshes"];
     for (size_t m = 0; m < meshes.size(); ++m) {
       std::vector<Primitive> prims;
-      for (Json& source : meshes[m]["primitives"]) {
+      for (const Json& source : meshes[m]["primitives"]) {
         Primitive p;
         if (!ReadPrimitive(*json, *bin, &source, &p))
           return WriteError(path, "unexpected primitive layout from the glTF writer");
-        if (p.mode == kTriangles) {
-          p.deviation = TriangleDeviation(result, p);
-          Optimise(&p);
-        }
+        if (p.mode == kTriangles) p.deviation = TriangleDeviation(result, p);
         prims.push_back(std::move(p));
       }
+      MergeByColour(json, &prims);
+      for (Primitive& p : prims)
+        if (p.mode == kTriangles) Optimise(&p);
       const Grid grid = ChooseGrid(prims, max_shift / scales[m]);
       double shift = 0.0;
       for (Primitive& p : prims) {
@@ -593,7 +700,8 @@ Status CompressGlb(const Model& model, const MeshResult& result, double max_shif
         if (!p.normal.empty()) attributes["NORMAL"] = AddNormals(&out, p.normal);
         if (!p.face_id.empty()) attributes["_FACE_ID"] = AddIdAttribute(&out, p.face_id);
         if (!p.edge_id.empty()) attributes["_EDGE_ID"] = AddIdAttribute(&out, p.edge_id);
-        Json& target = *p.json;
+        if (!p.colour.empty()) attributes["COLOR_0"] = AddColours(&out, p.colour);
+        Json& target = p.json;
         target["attributes"] = attributes;
         size_t stride = 4;
         const size_t vertices = p.position.size() / 3;
@@ -604,6 +712,8 @@ Status CompressGlb(const Model& model, const MeshResult& result, double max_shif
           target["extras"]["triangle_deviation"] = out.AddBytes(p.deviation);
         if (p.mode == kLines) EdgeTable(&out, &target);
       }
+      meshes[m]["primitives"] = Json::array();
+      for (Primitive& p : prims) meshes[m]["primitives"].push_back(std::move(p.json));
       if (shift * scales[m] > max_shift * (1 + 1e-9) && grid.step > 0)
         return Status(StatusCode::kInternal, "a compressed position moved " +
                                                  std::to_string(shift * scales[m]) + " (allowed " +
@@ -611,6 +721,7 @@ Status CompressGlb(const Model& model, const MeshResult& result, double max_shif
       if (grid.step > 0) placed.push_back({static_cast<int>(m), grid});
     }
   }
+  PruneMaterials(json);
   // A quantized mesh is drawn by a child node carrying its grid (KHR_mesh_quantization).
   if (json->contains("nodes"))
     for (size_t n = 0, count = (*json)["nodes"].size(); n < count; ++n) {
