@@ -206,23 +206,26 @@ def test_compressed_glb_reads_as_the_plain_one(run, data_dir, shared_dir, tmp_pa
     # The rounding fits in what the mesh left free: estimated deviation + rounding <= request.
     assert report["estimated_deviation"] + worst * 1e3 <= requested * (1 + 1e-9)
 
-    # Normals: octahedral 12-bit, within 0.1 degree of the plain file's (matched by position).
+    # Normals: octahedral 10-bit, within 0.25 degrees of the plain file's (matched by position;
+    # a node on a seam is in its face twice, with two normals: the nearer one counts).
     for o_plain, o_packed in zip([o for o in a["objects"] if o["kind"] == "triangles"],
                                  [o for o in b["objects"] if o["kind"] == "triangles"]):
         p = np.array(o_plain["position"]).reshape(-1, 3)
         n = np.array(o_plain["normal"]).reshape(-1, 3)
+        n /= np.linalg.norm(n, axis=1, keepdims=True)
         q = np.array(o_packed["position"]).reshape(-1, 3)
         m = np.array(o_packed["normal"]).reshape(-1, 3)
+        m /= np.linalg.norm(m, axis=1, keepdims=True)
         fp = np.array(o_plain["face_id"])
         fq = np.array(o_packed["face_id"])
-        for f in np.unique(fq)[:40]:
+        for f in np.unique(fq):
             i = np.flatnonzero(fp == f)
             j = np.flatnonzero(fq == f)
-            d = np.linalg.norm(q[j][:, None, :] - p[i][None, :, :], axis=2).argmin(axis=1)
-            u = n[i][d] / np.linalg.norm(n[i][d], axis=1, keepdims=True)
-            v = m[j] / np.linalg.norm(m[j], axis=1, keepdims=True)
-            angle = np.degrees(np.arccos(np.clip((u * v).sum(axis=1), -1, 1)))
-            assert angle.max() < 0.1, (f, angle.max())
+            d = np.linalg.norm(q[j][:, None, :] - p[i][None, :, :], axis=2)
+            coincident = d <= d.min(axis=1, keepdims=True) + 1e-9
+            cosine = np.where(coincident, m[j] @ n[i].T, -1.0).max(axis=1)
+            angle = np.degrees(np.arccos(np.clip(cosine, -1, 1)))
+            assert angle.max() < 0.25, (f, angle.max())
 
     # The edge table, in binary accessors where that is smaller, says what the plain file's
     # JSON says.

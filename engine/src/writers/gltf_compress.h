@@ -20,7 +20,7 @@ namespace rdmesh {
 ///   vertex moves farther than `max_shift` (glTF world units, metres) through its nodes'
 ///   transforms: 16-bit integers scaled by a child node when they fit, else floats of a
 ///   power-of-two grid (the EXPONENTIAL filter, exact); `max_shift` 0 keeps the floats;
-/// - NORMAL octahedral-encoded (the OCTAHEDRAL filter, 16-bit);
+/// - NORMAL octahedral-encoded (the OCTAHEDRAL filter, 10 bits in 16-bit integers);
 /// - _FACE_ID and _EDGE_ID 16-bit integers when the ids fit;
 /// - each LINES primitive's edge table (extras.edges) as four binary accessors when that is
 ///   smaller than its JSON;

@@ -463,8 +463,8 @@ Status AddGltfIdsAndEdges(const Model& model, const MeshResult& result,
         "an edges primitive's extras.edge_table holds its edges as accessors (id, flags: bit 0 "
         "seam, bit 1 sharp, bits 8-15 face count, dihedral, faces: the concatenated face ids); "
         "faces.surface_type per face id (byte f - 1) indexes faces.surface_types; a triangle "
-        "primitive's extras.triangle_deviation per triangle is its estimated deviation in 1/250 "
-        "of requested_deviation";
+        "primitive's extras.triangle_deviation per triangle is its estimated deviation in "
+        "steps of requested_deviation / deviation_steps";
     // Model units are mm and glTF's are metres (WriteGlb).
     const double max_shift = kCompressRoundingShare * result.summary.requested_deviation * 1e-3;
     Status compressed = CompressGlb(model, result, max_shift, path, &glb.json, &glb.bin);
