@@ -1,25 +1,12 @@
 #include "model/model_info.h"
 
-#include <BRepAdaptor_Surface.hxx>
 #include <BRepBndLib.hxx>
-#include <BRepTools.hxx>
 #include <BRep_Tool.hxx>
-#include <BndLib_Add3dCurve.hxx>
 #include <Bnd_Box.hxx>
-#include <GeomAdaptor_Curve.hxx>
-#include <Geom_BSplineCurve.hxx>
-#include <Geom_BezierCurve.hxx>
-#include <Geom_Conic.hxx>
-#include <Geom_Line.hxx>
-#include <Geom_RectangularTrimmedSurface.hxx>
-#include <Geom_SurfaceOfLinearExtrusion.hxx>
-#include <Geom_SurfaceOfRevolution.hxx>
-#include <Precision.hxx>
 #include <TCollection_AsciiString.hxx>
 #include <TDF_LabelSequence.hxx>
 #include <TDataStd_Name.hxx>
 #include <TopExp.hxx>
-#include <TopLoc_Location.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
@@ -36,6 +23,7 @@
 
 #include "core/parallel.h"
 #include "geometry/surface_type.h"
+#include "model/face_boxes.h"
 
 namespace rdmesh {
 
@@ -122,79 +110,6 @@ bool LooseBoxHolds(SurfaceType type) {
   }
 }
 
-// Whether BndLib_Add3dCurve::Add's box of `curve` holds it: exact for lines and conics, the
-// convex hull of the poles for Bezier and B-spline curves (others are sampled, which may not).
-bool CurveBoxHolds(const Handle(Geom_Curve) & curve) {
-  return curve->IsKind(STANDARD_TYPE(Geom_Line)) || curve->IsKind(STANDARD_TYPE(Geom_Conic)) ||
-         curve->IsKind(STANDARD_TYPE(Geom_BSplineCurve)) ||
-         curve->IsKind(STANDARD_TYPE(Geom_BezierCurve));
-}
-
-// A box that holds a face of revolution or of linear extrusion, from its basis curve's box over
-// the face's parameter range: that box swept around the axis (within the cylinder through its
-// farthest corner) or along the direction. Void when the basis curve's box may not hold it.
-// Such faces are otherwise boxed tightly one by one, which costs tens of milliseconds each
-// (BndLib_AddSurface::AddOptimal optimises over the swept surface); with a box that holds, the
-// pruning below skips those that cannot reach the model's box.
-Bnd_Box SweptFaceBox(const TopoDS_Face& face) {
-  Bnd_Box box;
-  TopLoc_Location location;
-  Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
-  if (surface.IsNull()) return box;
-  while (auto trimmed = Handle(Geom_RectangularTrimmedSurface)::DownCast(surface))
-    surface = trimmed->BasisSurface();
-  double u0, u1, v0, v1;
-  BRepTools::UVBounds(face, u0, u1, v0, v1);
-  if (!(u0 <= u1 && v0 <= v1) || Precision::IsInfinite(u0) || Precision::IsInfinite(u1) ||
-      Precision::IsInfinite(v0) || Precision::IsInfinite(v1))
-    return box;
-  Bnd_Box basis;
-  if (auto revolved = Handle(Geom_SurfaceOfRevolution)::DownCast(surface)) {
-    // S(u, v) = C(v) turned by u about the axis.
-    const Handle(Geom_Curve)& curve = revolved->BasisCurve();
-    if (!CurveBoxHolds(curve)) return box;
-    BndLib_Add3dCurve::Add(GeomAdaptor_Curve(curve, v0, v1), 0.0, basis);
-    if (basis.IsVoid() || basis.IsOpen()) return box;
-    const gp_Ax1 axis = revolved->Axis();
-    const gp_XYZ o = axis.Location().XYZ(), d = axis.Direction().XYZ();
-    double c[6];
-    basis.Get(c[0], c[1], c[2], c[3], c[4], c[5]);
-    double a = HUGE_VAL, b = -HUGE_VAL, r = 0;
-    for (int corner = 0; corner < 8; ++corner) {
-      const gp_XYZ p(c[corner & 1 ? 3 : 0], c[corner & 2 ? 4 : 1], c[corner & 4 ? 5 : 2]);
-      const double t = (p - o).Dot(d);
-      a = std::min(a, t), b = std::max(b, t);
-      r = std::max(r, (p - o - t * d).Modulus());
-    }
-    for (int k = 1; k <= 3; ++k) {
-      const double s = r * std::sqrt(std::max(0.0, 1.0 - d.Coord(k) * d.Coord(k)));
-      const double lo = o.Coord(k) + std::min(a * d.Coord(k), b * d.Coord(k)) - s;
-      const double hi = o.Coord(k) + std::max(a * d.Coord(k), b * d.Coord(k)) + s;
-      c[k - 1] = lo, c[k + 2] = hi;
-    }
-    box.Update(c[0], c[1], c[2], c[3], c[4], c[5]);
-  } else if (auto extruded = Handle(Geom_SurfaceOfLinearExtrusion)::DownCast(surface)) {
-    // S(u, v) = C(u) + v D.
-    const Handle(Geom_Curve)& curve = extruded->BasisCurve();
-    if (!CurveBoxHolds(curve)) return box;
-    BndLib_Add3dCurve::Add(GeomAdaptor_Curve(curve, u0, u1), 0.0, basis);
-    if (basis.IsVoid() || basis.IsOpen()) return box;
-    const gp_XYZ d = extruded->Direction().XYZ();
-    double c[6];
-    basis.Get(c[0], c[1], c[2], c[3], c[4], c[5]);
-    for (int k = 1; k <= 3; ++k) {
-      c[k - 1] += std::min(v0 * d.Coord(k), v1 * d.Coord(k));
-      c[k + 2] += std::max(v0 * d.Coord(k), v1 * d.Coord(k));
-    }
-    box.Update(c[0], c[1], c[2], c[3], c[4], c[5]);
-  } else {
-    return box;
-  }
-  // The face's tolerance, as BRepBndLib::Add enlarges the other kinds' boxes by it.
-  box.Enlarge(BRep_Tool::Tolerance(face));
-  return location.IsIdentity() ? box : box.Transformed(location.Transformation());
-}
-
 // Whether `inner`, grown by `margin`, lies inside `outer` (neither void nor open).
 bool Inside(const Bnd_Box& inner, const Bnd_Box& outer, double margin) {
   if (inner.IsVoid() || outer.IsVoid() || inner.IsOpen() || outer.IsOpen()) return false;
@@ -228,6 +143,15 @@ Bnd_Box BoundingBox(const Model& model, const std::vector<SurfaceType>& types) {
   runner.For(0, static_cast<int>(owners.size()), [&](int i) {
     const int id = owners[i];
     holds[id - 1] = LooseBoxHolds(types[id - 1]);
+    if (types[id - 1] == SurfaceType::kTorus || types[id - 1] == SurfaceType::kSphere) {
+      // Tight in closed form: the optimiser's slowest cases otherwise.
+      tight[id - 1] = ClosedFormFaceBox(model.face(id));
+      if (!tight[id - 1].IsVoid()) {
+        loose[id - 1] = tight[id - 1];
+        computed[id - 1] = 1;
+        return;
+      }
+    }
     if (holds[id - 1]) {
       BRepBndLib::Add(model.face(id), loose[id - 1], /*useTriangulation=*/false);
     } else if (types[id - 1] == SurfaceType::kRevolution ||
