@@ -142,7 +142,7 @@ std::string FaceReasons(const Json& report, const char* status, int64_t count,
 // Whether the child's stderr or message says it ran out of memory.
 bool OutOfMemory(const std::string& text) {
   for (const char* sign : {"Out of memory", "out of memory", "bad_alloc", "Cannot allocate memory",
-                           "failed to map segment", "cannot allocate memory"})
+                           "failed to map segment", "cannot allocate memory", "OutOfMemory"})
     if (text.find(sign) != std::string::npos) return true;
   return false;
 }
@@ -225,8 +225,10 @@ class Display {
 // One run of the batch.
 class Batch {
  public:
-  Batch(const BatchFlags& flags, std::vector<BatchInput> inputs, std::vector<double> levels)
-      : flags_(flags),
+  Batch(const BatchFlags& flags, std::vector<BatchInput> inputs, std::vector<double> levels,
+        ChildPool::Entry main)
+      : main_(main),
+        flags_(flags),
         inputs_(std::move(inputs)),
         levels_(std::move(levels)),
         out_(OutputFolder(flags.output_dir)),
@@ -258,6 +260,7 @@ class Batch {
   void Summarize(double seconds, bool interrupted);
   void RemoveEmptyFolders();
 
+  ChildPool::Entry main_;  // this program's main, run by each child; null: exec mesher_
   const BatchFlags& flags_;
   std::vector<BatchInput> inputs_;
   std::vector<double> levels_;
@@ -293,10 +296,12 @@ Status Batch::Prepare() {
   // RDMESH_BATCH_MESHER: another program in the mesher's place (the tests' stand-ins).
   const char* mesher = std::getenv("RDMESH_BATCH_MESHER");
   std::error_code error;
-  if (mesher != nullptr && mesher[0] != '\0')
+  if (mesher != nullptr && mesher[0] != '\0') {
     mesher_ = mesher;
-  else
+    main_ = nullptr;
+  } else {
     mesher_ = fs::read_symlink("/proc/self/exe", error).string();
+  }
   if (mesher_.empty())
     return Status(StatusCode::kInternal, "cannot find the rdmesh binary: " + error.message());
 
@@ -471,8 +476,8 @@ void Batch::StartOrSkip(size_t index) {
 
   fs::create_directories((out_ / input.output).parent_path(), error);
   const double limit = timeout_ > 0 ? timeout_ + kKillGrace : 0.0;
-  Status started =
-      pool_.Start(static_cast<int>(index), ChildArgs(input), ChildEnv(), limit, memory_limit_);
+  Status started = pool_.Start(static_cast<int>(index), ChildArgs(input), ChildEnv(), limit,
+                               memory_limit_, main_);
   if (!started.ok()) {
     Json entry = NewEntry(index, sha256, size);
     entry["status"] = "crashed";
@@ -557,10 +562,16 @@ void Batch::Finish(const ChildResult& result) {
     if (status == "crashed" && !message.empty())
       reason = "exited with code " + std::to_string(result.exit_code) + ": " + reason;
   }
-  if (status != "ok" && (OutOfMemory(result.err) || OutOfMemory(message)))
-    reason += memory_limit_ > 0
-                  ? " (out of memory: the limit is --memory-limit " + Bytes(memory_limit_) + ")"
-                  : " (out of memory)";
+  // Out of memory says nothing of the file: whatever the exit, the process gave out.
+  if (status != "ok" && (OutOfMemory(result.err) || OutOfMemory(message))) {
+    status = "crashed";
+    const std::string limit =
+        memory_limit_ > 0 ? "the limit is --memory-limit " + Bytes(memory_limit_) : "";
+    if (OutOfMemory(reason))
+      reason += limit.empty() ? "" : " (" + limit + ")";
+    else
+      reason += limit.empty() ? " (out of memory)" : " (out of memory: " + limit + ")";
+  }
 
   if (has_report) {
     entry["faces"] = IntField(report, "faces_ok") + IntField(report, "faces_failed") +
@@ -805,7 +816,7 @@ CLI::App* AddBatchCommand(CLI::App* app, BatchFlags* flags) {
   return batch;
 }
 
-int RunBatch(const BatchFlags& flags) {
+int RunBatch(const BatchFlags& flags, int (*main)(int argc, char** argv)) {
   auto usage = [](const std::string& message) {
     std::cerr << "rdmesh: error: " << message << "\n";
     return kExitUsage;
@@ -825,7 +836,7 @@ int RunBatch(const BatchFlags& flags) {
   Result<std::vector<BatchInput>> inputs =
       CollectInputs(flags.inputs, "." + format, flags.output_dir);
   if (!inputs.ok()) return usage(inputs.status().message());
-  return Batch(resolved, std::move(*inputs), std::move(*levels)).Run();
+  return Batch(resolved, std::move(*inputs), std::move(*levels), main).Run();
 }
 
 }  // namespace rdmesh::cli

@@ -30,7 +30,9 @@ struct BatchFlags {
 CLI::App* AddBatchCommand(CLI::App* app, BatchFlags* flags);
 
 /// Runs the batch; the exit code: 0 when every file is ok, 1 when any is not, 2 for bad usage,
-/// 4 when interrupted before every file was done.
-int RunBatch(const BatchFlags& flags);
+/// 4 when interrupted before every file was done. `main` is this program's main: each child runs
+/// it in a fork of this process, which has loaded the libraries already, instead of executing
+/// the binary anew (RDMESH_BATCH_MESHER, another program, is executed).
+int RunBatch(const BatchFlags& flags, int (*main)(int argc, char** argv));
 
 }  // namespace rdmesh::cli

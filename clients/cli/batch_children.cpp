@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
+#include <iostream>
 
 namespace rdmesh::cli {
 
@@ -33,9 +35,10 @@ double Seconds(std::chrono::steady_clock::duration duration) {
   return std::chrono::duration<double>(duration).count();
 }
 
-// Only async-signal-safe calls between fork and exec: the parent may hold locks.
-[[noreturn]] void ExecChild(pid_t parent, char* const* argv, char* const* envp, int out_fd,
-                            int err_fd, uint64_t memory_limit, const sigset_t& mask) {
+// Only async-signal-safe calls between fork and exec: the parent may hold locks. Without exec
+// (`entry`), the child goes on as a copy of this single-threaded process: no lock is held.
+[[noreturn]] void RunChild(pid_t parent, char** argv, char** envp, int out_fd, int err_fd,
+                           uint64_t memory_limit, const sigset_t& mask, ChildPool::Entry entry) {
   setpgid(0, 0);
   prctl(PR_SET_PDEATHSIG, SIGKILL);
   if (getppid() != parent) _exit(127);  // the batch died before prctl
@@ -49,6 +52,19 @@ double Seconds(std::chrono::steady_clock::duration duration) {
   if (null_fd >= 0) dup2(null_fd, 0);
   dup2(out_fd, 1);
   dup2(err_fd, 2);
+  if (entry != nullptr) {
+    // Nothing of the batch's open files (other children's pipes, the manifest, its lock) stays
+    // open in the child.
+    close_range(3, ~0U, 0);
+    environ = envp;
+    int argc = 0;
+    while (argv[argc] != nullptr) ++argc;
+    const int code = entry(argc, argv);
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(nullptr);
+    _exit(code);
+  }
   execve(argv[0], argv, envp);
   const char* reason = strerror(errno);
   const char* parts[] = {"cannot run ", argv[0], ": ", reason, "\n"};
@@ -75,7 +91,7 @@ ChildPool::~ChildPool() {
 
 Status ChildPool::Start(int id, const std::vector<std::string>& argv,
                         const std::vector<std::string>& env, double timeout_seconds,
-                        uint64_t memory_limit) {
+                        uint64_t memory_limit, Entry entry) {
   std::vector<char*> args, envp;
   for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
   args.push_back(nullptr);
@@ -91,9 +107,13 @@ Status ChildPool::Start(int id, const std::vector<std::string>& argv,
   const pid_t parent = getpid();
   Child child;
   child.start = std::chrono::steady_clock::now();
+  // What this process has buffered must not be written a second time by the child.
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
   const pid_t pid = fork();
   if (pid == 0)
-    ExecChild(parent, args.data(), envp.data(), out[1], err[1], memory_limit, saved_mask_);
+    RunChild(parent, args.data(), envp.data(), out[1], err[1], memory_limit, saved_mask_, entry);
   close(out[1]);
   close(err[1]);
   if (pid < 0) {

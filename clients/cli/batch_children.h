@@ -38,12 +38,19 @@ class ChildPool {
   ChildPool(const ChildPool&) = delete;
   ChildPool& operator=(const ChildPool&) = delete;
 
+  /// The program run in the forked child instead of executing argv[0]: this program's own
+  /// main, which then costs no dynamic loading per child. Only for a process with no other
+  /// thread, as the pool's is.
+  using Entry = int (*)(int argc, char** argv);
+
   /// Starts `argv` (argv[0] an absolute path) with exactly the environment `env` ("NAME=value").
   /// `timeout_seconds` > 0: its group is killed with SIGKILL that long after the start.
   /// `memory_limit` > 0: its RLIMIT_AS, in bytes. kInternal when fork or pipe fail; a program
   /// that cannot be executed ends with exit code 127 and the reason on its stderr.
+  /// With `entry`, the child runs entry(argv) in the forked copy of this process (argv[0] is
+  /// then only its name) and exits with its result.
   Status Start(int id, const std::vector<std::string>& argv, const std::vector<std::string>& env,
-               double timeout_seconds, uint64_t memory_limit);
+               double timeout_seconds, uint64_t memory_limit, Entry entry = nullptr);
 
   int running() const { return static_cast<int>(children_.size()); }
 

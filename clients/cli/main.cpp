@@ -414,7 +414,7 @@ int Main(int argc, char** argv) {
     return code == 0 ? kExitOk : kExitUsage;
   }
   // The batch supervises a process per file itself.
-  if (batch->parsed()) return RunBatch(batch_flags);
+  if (batch->parsed()) return RunBatch(batch_flags, &Main);
 
   const CommonFlags& common = mesh->parsed() ? mesh_common : info_common;
   return RunIsolated(

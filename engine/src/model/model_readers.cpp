@@ -24,6 +24,7 @@
 #include <STEPControl_Reader.hxx>
 #include <Standard_ErrorHandler.hxx>
 #include <Standard_Failure.hxx>
+#include <Standard_OutOfMemory.hxx>
 #include <TColStd_SequenceOfAsciiString.hxx>
 #include <TCollection_HAsciiString.hxx>
 #include <TDF_LabelSequence.hxx>
@@ -365,6 +366,9 @@ Result<std::optional<ReadShape>> ReadStepOwn(const std::string& bytes, const Con
   Result<step::Translated> translated =
       step::TranslateStep(*file, step::TranslateOptions{}, context);
   if (context != nullptr && context->ShouldStop()) return context->StopStatus();
+  // Out of memory is no reason to try OCCT's reader, which would fail the same way, worse said.
+  if (!translated.ok() && translated.status().code() == StatusCode::kResourceExhausted)
+    return translated.status();
   if (!translated.ok()) {
     *why = "translator: " + translated.status().message();
     return std::optional<ReadShape>();
@@ -390,8 +394,13 @@ Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
     // reader gets it.
     try {
       Result<std::optional<ReadShape>> own = ReadStepOwn(bytes, context, &fallback);
+      if (!own.ok() && own.status().code() == StatusCode::kResourceExhausted)
+        return Status(StatusCode::kResourceExhausted,
+                      "cannot read '" + name + "': " + own.status().message());
       if (!own.ok()) return own.status();
       if (own->has_value()) return std::move(**own);
+    } catch (const Standard_OutOfMemory&) {
+      return Status(StatusCode::kResourceExhausted, "cannot read '" + name + "': out of memory");
     } catch (const Standard_Failure& failure) {
       fallback = std::string("own reader failed: ") + failure.DynamicType()->Name();
     }
@@ -570,6 +579,10 @@ Result<ReadShape> ReadModelBytes(const std::string& bytes, ModelFormat format,
         break;
     }
     return ParseError(name, "unknown model format");
+  } catch (const Standard_OutOfMemory&) {
+    return Status(StatusCode::kResourceExhausted, "cannot read '" + name + "': out of memory");
+  } catch (const std::bad_alloc&) {
+    return Status(StatusCode::kResourceExhausted, "cannot read '" + name + "': out of memory");
   } catch (const Standard_Failure& failure) {
     const char* what = failure.GetMessageString();
     return ParseError(

@@ -16,6 +16,7 @@
 #include <Quantity_ColorRGBA.hxx>
 #include <Standard_ErrorHandler.hxx>
 #include <Standard_Failure.hxx>
+#include <Standard_OutOfMemory.hxx>
 #include <TCollection_ExtendedString.hxx>
 #include <TDF_Label.hxx>
 #include <TDF_LabelSequence.hxx>
@@ -1392,6 +1393,10 @@ Result<Translated> TranslateStep(const File& file, const TranslateOptions& optio
     return out;
   } catch (const Broken& broken) {
     return Status(StatusCode::kParseError, broken.what);
+  } catch (const std::bad_alloc&) {
+    return Status(StatusCode::kResourceExhausted, "out of memory");
+  } catch (const Standard_OutOfMemory&) {
+    return Status(StatusCode::kResourceExhausted, "out of memory");
   } catch (const Standard_Failure& failure) {
     Translated out;
     out.supported = false;
