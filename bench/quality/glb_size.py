@@ -2,11 +2,13 @@
 """Bytes of a .glb per triangle over the corpus: rdmesh's plain and --compress files of the same
 mesh, and OCCT's own writer on BRepMesh's mesh at the same measured deviation (issue 37).
 
-Usage: bench/quality/glb_size.py [--build build] [--out DIR] [--table bench/GLB.md] [MODEL...]
+Usage: bench/quality/glb_size.py [--build build] [--node-dir BUILD/node_tools] [--out DIR]
+                                 [--table bench/GLB.md] [MODEL...]
 
 For each model, at rdmesh's default deviation (1e-3 of the bounding-box diagonal):
 - `rdmesh mesh MODEL -o c.glb --compress` (meshed to 98.5% of the deviation, positions rounded
-  by at most 1.5% of it), and the plain file of the same mesh, `rdmesh mesh MODEL -o p.glb
+  by at most 1.5% of it), read back as a viewer reads it (bench/quality/decode_glb.mjs: three.js
+  with meshoptimizer's decoder) and measured by the yardstick; and the plain file of the same mesh, `rdmesh mesh MODEL -o p.glb
   --max-deviation-rel 0.985e-3` (the same triangles, checked), and its .msh, which the yardstick
   (`meshbench eval`) measures: rdmesh's measured deviation (the rounding adds at most 1.5e-5 of
   the diagonal);
@@ -24,6 +26,7 @@ import glob
 import json
 import math
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -38,8 +41,9 @@ LEVELS = "1e-2,3e-3,1e-3"
 ANGLE = 0.5
 
 
-def run_json(args, timeout=900):
-    done = subprocess.run([str(a) for a in args], capture_output=True, text=True, timeout=timeout)
+def run_json(args, timeout=900, cwd=None):
+    done = subprocess.run([str(a) for a in args], capture_output=True, text=True, timeout=timeout,
+                          cwd=cwd)
     if done.returncode != 0:
         raise RuntimeError("%s: exit %d: %s" % (os.path.basename(str(args[0])), done.returncode,
                                                  done.stderr.strip()[-300:]))
@@ -48,6 +52,39 @@ def run_json(args, timeout=900):
 
 def measure(meshbench, model, mesh):
     return run_json([meshbench, "eval", model, mesh])["hausdorff_rel"]
+
+
+def decoded_msh(a, glb, msh):
+    """Writes the triangles a viewer reads from `glb` as MSH 4.1 in the model's frame (mm, +Z up),
+    one element block per face id, for the yardstick."""
+    # Node resolves `three` from the script's own folder: run a copy inside the node directory.
+    script = os.path.join(a.node_dir, "decode_glb.mjs")
+    shutil.copyfile(os.path.join(HERE, "decode_glb.mjs"), script)
+    objects = run_json(["node", script, os.path.abspath(glb)], cwd=a.node_dir)
+    points, blocks = [], {}
+    for o in objects:
+        base = len(points)
+        xyz = o["position"]
+        points += [(1000.0 * xyz[i], -1000.0 * xyz[i + 2], 1000.0 * xyz[i + 1])
+                   for i in range(0, len(xyz), 3)]
+        index = o["index"]
+        for t in range(0, len(index), 3):
+            corner = [base + index[t + k] + 1 for k in range(3)]
+            blocks.setdefault(o["face"][index[t]], []).append(corner)
+    with open(msh, "w") as out:
+        out.write("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 %d 1 %d\n2 1 0 %d\n"
+                  % (len(points), len(points), len(points)))
+        out.write("".join("%d\n" % (i + 1) for i in range(len(points))))
+        out.write("".join("%.17g %.17g %.17g\n" % p for p in points))
+        count = sum(len(b) for b in blocks.values())
+        out.write("$EndNodes\n$Elements\n%d %d 1 %d\n" % (len(blocks), count, count))
+        tag = 1
+        for face in sorted(blocks):
+            out.write("2 %d 2 %d\n" % (face, len(blocks[face])))
+            for corner in blocks[face]:
+                out.write("%d %d %d %d\n" % (tag, *corner))
+                tag += 1
+        out.write("$EndElements\n")
 
 
 def one_model(a, meshbench, model):
@@ -70,6 +107,8 @@ def one_model(a, meshbench, model):
     row["compressed_bytes"] = os.path.getsize(os.path.join(out, "c.glb"))
     target = measure(meshbench, model, os.path.join(out, "p.msh"))
     row["rdmesh_measured_rel"] = target
+    decoded_msh(a, os.path.join(out, "c.glb"), os.path.join(out, "c.msh"))
+    row["compressed_measured_rel"] = measure(meshbench, model, os.path.join(out, "c.msh"))
     diagonal = packed["requested_deviation"] / REL
     tries = []
     deflection = target * diagonal
@@ -112,6 +151,8 @@ def table(rows, command):
         "- **plain**: `rdmesh mesh` .glb of the mesh that `--compress` writes (the same "
         "triangles: --compress meshes to 98.5% of the deviation), edges included;",
         "- **compressed**: `rdmesh mesh --compress`, edges included;",
+        "- **dev**: the yardstick's measured deviation (hausdorff_rel) of the plain mesh and of "
+        "the compressed file as three.js decodes it (rounding included);",
         "- **OCCT**: OCCT 7.6's RWGltf_CafWriter (default settings, no edges) on BRepMesh's mesh at "
         "the deflection whose measured deviation (yardstick) is nearest rdmesh's (`dev` columns: "
         "measured hausdorff_rel, rdmesh's without its rounding of at most 1.5e-5);",
@@ -142,6 +183,10 @@ def table(rows, command):
                 sum(r["compressed_bytes"] <= 0.25 * r["plain_bytes"] for r in ok), len(ok)),
             "| triangles, all models (OCCT: at the matched deviation) | %d | %d | %d |" % (
                 total_t, total_t, total_o),
+            "| measured deviation / 1e-3, largest (compressed: as decoded) | %.3f | %.3f | %.3f |" % (
+                max(r["rdmesh_measured_rel"] for r in ok) / REL,
+                max(r["compressed_measured_rel"] for r in ok) / REL,
+                max(r["occt_measured_rel"] for r in ok) / REL),
             "| levels %s, bytes / finest level, geometric mean | | %s | |" % (
                 LEVELS, " / ".join("%.3f" % geomean([r["level_bytes"][i] / r["level_bytes"][-1]
                                                       for r in ok])
@@ -150,17 +195,19 @@ def table(rows, command):
         ]
     lines += [
         "| model | triangles | plain B/tri | compressed B/tri | compressed / plain | "
-        "rdmesh dev | OCCT triangles | OCCT dev | OCCT B/tri | levels / finest |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "rdmesh dev | compressed dev | OCCT triangles | OCCT dev | OCCT B/tri | levels / finest |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         if "error" in r:
-            lines.append("| %s | failed: %s |||||||||" % (r["model"], r["error"].replace("|", "/")))
+            lines.append("| %s | failed: %s ||||||||||" % (
+                r["model"], " ".join(r["error"].replace("|", "/").split())[:200]))
             continue
-        lines.append("| %s | %d | %.1f | %.1f | %.3f | %.2e | %d | %.2e | %.1f | %s |" % (
+        lines.append("| %s | %d | %.1f | %.1f | %.3f | %.2e | %.2e | %d | %.2e | %.1f | %s |" % (
             r["model"], r["triangles"], r["plain_bytes"] / r["triangles"],
             r["compressed_bytes"] / r["triangles"], r["compressed_bytes"] / r["plain_bytes"],
-            r["rdmesh_measured_rel"], r["occt_triangles"], r["occt_measured_rel"],
+            r["rdmesh_measured_rel"], r["compressed_measured_rel"], r["occt_triangles"],
+            r["occt_measured_rel"],
             r["occt_bytes"] / r["occt_triangles"],
             " / ".join("%.2f" % (b / r["level_bytes"][-1]) for b in r["level_bytes"][:-1])))
     return "\n".join(lines) + "\n"
@@ -176,10 +223,13 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", default=os.path.join(REPO, "build"),
                     help="build directory with bin/rdmesh, brepmesh_runner, occt_glb_runner")
+    ap.add_argument("--node-dir", help="where npm installed three (default BUILD/node_tools, as "
+                    "the CLI tests leave it)")
     ap.add_argument("--out", default="/tmp/rdmesh-glb-size", help="directory for the files")
     ap.add_argument("--table", default=os.path.join(REPO, "bench", "GLB.md"))
     ap.add_argument("models", nargs="*", help="default: every ../shared/corpus/*.st*p")
     a = ap.parse_args()
+    a.node_dir = os.path.abspath(a.node_dir or os.path.join(a.build, "node_tools"))
     built = subprocess.run(["sh", os.path.join(REPO, "scripts", "yardstick.sh")], check=True,
                            capture_output=True, text=True).stdout.strip().splitlines()[-1]
     meshbench = os.path.join(built, "meshbench")
