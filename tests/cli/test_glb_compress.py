@@ -146,6 +146,33 @@ def same_elements(plain, packed, tolerance, per):
     return worst
 
 
+def write_decoded_msh(loaded, path):
+    """The triangles three.js reads (world metres, +Y up) as MSH 4.1 in the model's frame (mm,
+    +Z up), one element block per face id, for the yardstick."""
+    points, blocks = [], {}
+    for xyz, ids in corners(loaded, "triangles"):
+        # xyz: three corners per triangle, in order; ids: the corners' face ids.
+        model = np.stack([xyz[:, 0], -xyz[:, 2], xyz[:, 1]], axis=1) * 1e3
+        base = len(points)
+        points.extend(model)
+        for t, face in enumerate(ids[::3]):
+            blocks.setdefault(int(face), []).append(base + 3 * t + np.arange(1, 4))
+    count = sum(len(b) for b in blocks.values())
+    lines = ["$MeshFormat", "4.1 0 8", "$EndMeshFormat", "$Nodes",
+             "1 %d 1 %d" % (len(points), len(points)), "2 1 0 %d" % len(points)]
+    lines += [str(i + 1) for i in range(len(points))]
+    lines += ["%.17g %.17g %.17g" % tuple(p) for p in points]
+    lines += ["$EndNodes", "$Elements", "%d %d 1 %d" % (len(blocks), count, count)]
+    tag = 1
+    for face in sorted(blocks):
+        lines.append("2 %d 2 %d" % (face, len(blocks[face])))
+        for corner in blocks[face]:
+            lines.append("%d %d %d %d" % (tag, *corner))
+            tag += 1
+    lines.append("$EndElements")
+    path.write_text("\n".join(lines) + "\n")
+
+
 def mesh_pair(run, model, tmp_path, *options):
     """The compressed file and the plain file of the same mesh: --compress meshes to
     (1 - SHARE) of the deviation, which a plain run asks for directly."""
@@ -166,11 +193,13 @@ def mesh_pair(run, model, tmp_path, *options):
 @pytest.mark.parametrize("model", ["corpus", "pyocc_eight_cyl.stp"])
 def test_compressed_glb_reads_as_the_plain_one(run, data_dir, shared_dir, tmp_path, model,
                                                gltf_validate, three_load, three_meshopt,
-                                               decompress):
+                                               decompress, request):
+    meshbench = None
     if model == "corpus":
         path = shared_dir / "corpus" / CORPUS_MODEL
         if not path.is_file():
             pytest.skip(f"{path} is absent")
+        meshbench = request.getfixturevalue("meshbench")  # the yardstick: corpus model only
     else:
         path = data_dir / model
     packed, plain, report = mesh_pair(run, path, tmp_path)
@@ -253,6 +282,19 @@ def test_compressed_glb_reads_as_the_plain_one(run, data_dir, shared_dir, tmp_pa
         c = packed_edges[eid]
         assert (c["faces"], c["seam"], c["sharp"]) == (e["faces"], e["seam"], e["sharp"]), eid
         assert abs(c["dihedral"] - e["dihedral"]) <= 1e-5 * max(1.0, abs(e["dihedral"]))
+
+    # The yardstick on the triangles three.js decoded (rounding included): within the request,
+    # and no farther than the plain mesh's measure plus the rounding.
+    if meshbench is not None:
+        write_decoded_msh(b, tmp_path / "decoded.msh")
+        decoded = meshbench(path, tmp_path / "decoded.msh")
+        plain_msh = tmp_path / "plain.msh"
+        assert run("mesh", path, "-o", plain_msh, "--max-deviation-rel",
+                   repr(1e-3 * (1 - SHARE))).code == 0
+        measured = meshbench(path, plain_msh)
+        assert decoded["faces_covered"] == measured["faces_covered"]
+        assert decoded["hausdorff_rel"] <= measured["hausdorff_rel"] + 1.01 * SHARE * 1e-3
+        assert decoded["hausdorff_rel"] <= 1e-3, decoded
 
     # Per face its surface type, as the run reported it.
     types = b["extras"]["rdmesh"]["faces"]["surface_types"]
