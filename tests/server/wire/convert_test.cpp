@@ -45,6 +45,7 @@ TEST(ConvertOptionsTest, RoundTrip) {
   in.face_ids = {4, 1, 9};
   in.timeout_seconds = 7.5;
   in.sharp_edge_angle = 45.0;
+  in.compress = true;
   const MeshOptions out = FromProto(ToProto(in));
   EXPECT_EQ(out.max_deviation, in.max_deviation);
   EXPECT_EQ(out.max_deviation_rel, in.max_deviation_rel);
@@ -57,7 +58,9 @@ TEST(ConvertOptionsTest, RoundTrip) {
   EXPECT_EQ(out.face_ids, in.face_ids);
   EXPECT_EQ(out.timeout_seconds, in.timeout_seconds);
   EXPECT_EQ(out.sharp_edge_angle, in.sharp_edge_angle);
+  EXPECT_EQ(out.compress, in.compress);
   EXPECT_EQ(FromProto(pb::MeshOptions()).sharp_edge_angle, kDefaultSharpEdgeAngle);
+  EXPECT_FALSE(FromProto(pb::MeshOptions()).compress);
 }
 
 // FromProto converts; the engine's ValidateOptions, the one check of options, refuses what no
@@ -82,6 +85,19 @@ TEST(ConvertOptionsTest, ValuesNoRunAcceptsAreRefusedByTheEngine) {
   rejects([](pb::MeshOptions* o) { o->set_max_triangles(-5); }, "max_triangles");
   rejects([](pb::MeshOptions* o) { o->set_threads(-1); }, "threads");
   rejects([](pb::MeshOptions* o) { o->add_face_ids(0); }, "face_ids");
+  rejects(
+      [](pb::MeshOptions* o) {
+        o->set_compress(true);
+        o->set_max_triangles(100);
+      },
+      "compress");
+  rejects(
+      [](pb::MeshOptions* o) {
+        o->set_compress(true);
+        o->set_max_deviation_rel(0);
+        o->set_rd_tolerance(0.01);
+      },
+      "compress");
 }
 
 TEST(ConvertModelInfoTest, RoundTrip) {
