@@ -71,6 +71,8 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/parallel.h"
 #include "model/step/finish.h"
@@ -1057,6 +1059,12 @@ class Merger {
       : jobs_(jobs), shared_(shared) {
     for (FaceJob* job : jobs_) {
       job_of_.Bind(job->raw, job);
+      for (TopTools_DataMapOfShapeShape::Iterator it(job->healed_of_shared); it.More(); it.Next()) {
+        if (auto* copies = copies_of_shared_.ChangeSeek(it.Key()))
+          copies->emplace_back(job, it.Value());
+        else
+          copies_of_shared_.Bind(it.Key(), {{job, it.Value()}});
+      }
       for (TopTools_DataMapOfShapeReal::Iterator it(job->vertex_tolerances); it.More(); it.Next()) {
         if (double* known = vertex_tolerances_.ChangeSeek(it.Key()))
           *known = std::max(*known, it.Value());
@@ -1126,9 +1134,11 @@ class Merger {
       if (it.Value()->IsCurve3D()) te->ChangeCurves().Append(it.Value()->Copy());
     double tolerance = 0.;
     bool same_parameter = true, same_range = true;
-    for (FaceJob* job : jobs_) {
-      const TopoDS_Shape* healed = job->healed_of_shared.Seek(raw);
-      if (healed == nullptr) continue;
+    static const std::vector<std::pair<FaceJob*, TopoDS_Shape>> kNone;
+    const auto* found_copies = copies_of_shared_.Seek(raw);
+    const auto& copies = found_copies != nullptr ? *found_copies : kNone;
+    for (const auto& [job, copy] : copies) {
+      const TopoDS_Shape* healed = &copy;
       Handle(BRep_TEdge) he = Handle(BRep_TEdge)::DownCast(healed->TShape());
       for (BRep_ListIteratorOfListOfCurveRepresentation it(he->Curves()); it.More(); it.Next())
         if (!it.Value()->IsCurve3D()) te->ChangeCurves().Append(it.Value()->Copy());
@@ -1143,10 +1153,8 @@ class Merger {
     // The vertices in the order the last face whose fixing rebuilt the edge left them (a later
     // rebuild keeps the order it finds), else as built.
     const FaceJob* reordered = nullptr;
-    for (FaceJob* job : jobs_) {
-      const TopoDS_Shape* healed = job->healed_of_shared.Seek(raw);
-      if (healed != nullptr && !SameVertexOrder(*healed, raw, *job)) reordered = job;
-    }
+    for (const auto& [job, copy] : copies)
+      if (!SameVertexOrder(copy, raw, *job)) reordered = job;
     if (reordered == nullptr) {
       for (TopoDS_Iterator it(raw, Standard_False, Standard_False); it.More(); it.Next())
         builder.Add(
@@ -1214,6 +1222,11 @@ class Merger {
   const std::vector<FaceJob*>& jobs_;
   const TopTools_MapOfShape& shared_;
   NCollection_DataMap<TopoDS_Shape, FaceJob*, TopTools_ShapeMapHasher> job_of_;
+  // Each shared raw edge's fixed copies, with their faces' jobs, in the jobs' order: looked up
+  // once per edge, not in every face's map (quadratic in an item's faces).
+  NCollection_DataMap<TopoDS_Shape, std::vector<std::pair<FaceJob*, TopoDS_Shape>>,
+                      TopTools_ShapeMapHasher>
+      copies_of_shared_;
   TopTools_DataMapOfShapeReal vertex_tolerances_;
   TopTools_DataMapOfShapeShape vertices_, edges_, faces_, private_edges_;
 };
