@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -236,27 +237,24 @@ struct Builder {
   }
 };
 
-// An id attribute (_FACE_ID, _EDGE_ID): 16-bit integers when every id fits, else floats.
+// An id attribute (_FACE_ID, _EDGE_ID): 16-bit integers when every id fits, else floats. Eight
+// bytes a vertex, as 16-bit positions and colours, so they share one buffer view with them (one
+// view less of JSON; the codec spends next to nothing on the zero bytes).
 int AddIdAttribute(Builder* out, const std::vector<double>& ids) {
-  double low = 0, high = 0;
-  if (!ids.empty()) {
-    auto [a, b] = std::minmax_element(ids.begin(), ids.end());
-    low = *a, high = *b;
-  }
-  const bool small = low >= 0 && high <= 65535;
-  std::string raw(ids.size() * 4, '\0');
+  const bool small =
+      std::all_of(ids.begin(), ids.end(), [](double id) { return id >= 0 && id <= 65535; });
+  std::string raw(ids.size() * 8, '\0');
   for (size_t i = 0; i < ids.size(); ++i) {
     if (small) {
       const auto id = static_cast<uint16_t>(ids[i]);
-      std::memcpy(&raw[4 * i], &id, 2);
+      std::memcpy(&raw[8 * i], &id, 2);
     } else {
       const auto id = static_cast<float>(ids[i]);
-      std::memcpy(&raw[4 * i], &id, 4);
+      std::memcpy(&raw[8 * i], &id, 4);
     }
   }
-  Slice view = out->AddAttributeView(raw, ids.size(), 4, "NONE", kArrayBuffer);
-  return out->AddAccessor(view, small ? kUnsignedShort : kFloat, ids.size(), "SCALAR", false,
-                          Json::array({low}), Json::array({high}));
+  Slice view = out->AddAttributeView(raw, ids.size(), 8, "NONE", kArrayBuffer);
+  return out->AddAccessor(view, small ? kUnsignedShort : kFloat, ids.size(), "SCALAR", false);
 }
 
 struct Primitive {
@@ -671,6 +669,55 @@ std::vector<double> MeshScales(const Json& json) {
   return scale;
 }
 
+// Every node draws the first of its mesh's copies (`alias`), the copies go, and a mesh whose
+// positions are on a grid gets it from its node (KHR_mesh_quantization): folded into the node's
+// own translation and uniform scale when the node has no children and no matrix, else through a
+// new child node that draws the mesh.
+void PlaceGrids(Json* json, const std::vector<size_t>& alias, const std::vector<Grid>& grids) {
+  if (!json->contains("nodes")) return;
+  Json& nodes = (*json)["nodes"];
+  for (size_t n = 0, count = nodes.size(); n < count; ++n) {
+    if (!nodes[n].contains("mesh")) continue;
+    const size_t mesh = alias[nodes[n]["mesh"].get<size_t>()];
+    nodes[n]["mesh"] = mesh;
+    const Grid& grid = grids[mesh];
+    if (!(grid.step > 0)) continue;
+    const double offset[3] = {grid.origin[0] * grid.step, grid.origin[1] * grid.step,
+                              grid.origin[2] * grid.step};
+    const double scale = grid.shorts ? grid.step : 1.0;
+    Json& node = nodes[n];
+    const Json s = node.value("scale", Json::array({1.0, 1.0, 1.0}));
+    if (!node.contains("children") && !node.contains("matrix") && s[0] == s[1] && s[1] == s[2]) {
+      const Linear linear = NodeLinear(node);  // rotation times the uniform scale
+      Json t = node.value("translation", Json::array({0.0, 0.0, 0.0}));
+      for (int r = 0; r < 3; ++r)
+        t[r] = t[r].get<double>() + linear[3 * r] * offset[0] + linear[3 * r + 1] * offset[1] +
+               linear[3 * r + 2] * offset[2];
+      node["translation"] = t;
+      const double folded = s[0].get<double>() * scale;
+      if (folded != 1.0) node["scale"] = {folded, folded, folded};
+      continue;
+    }
+    Json child = {{"mesh", mesh}, {"translation", {offset[0], offset[1], offset[2]}}};
+    if (grid.shorts) child["scale"] = {scale, scale, scale};
+    node.erase("mesh");
+    nodes.push_back(child);
+    nodes[n]["children"].push_back(nodes.size() - 1);
+  }
+  // Renumber the meshes without the copies.
+  Json& meshes = (*json)["meshes"];
+  std::vector<size_t> index(alias.size());
+  Json kept = Json::array();
+  for (size_t m = 0; m < alias.size(); ++m)
+    if (alias[m] == m) {
+      index[m] = kept.size();
+      kept.push_back(std::move(meshes[m]));
+    }
+  meshes = std::move(kept);
+  for (Json& node : nodes)
+    if (node.contains("mesh")) node["mesh"] = index[node["mesh"].get<size_t>()];
+}
+
 }  // namespace
 
 Status CompressGlb(const Model& model, const MeshResult& result, double max_shift,
@@ -679,10 +726,22 @@ Status CompressGlb(const Model& model, const MeshResult& result, double max_shif
     return WriteError(path, "compression covers meshes only; the .glb holds images or skins");
   Builder out;
   const std::vector<double> scales = MeshScales(*json);
-  std::vector<std::pair<int, Grid>> placed;  // meshes whose positions need a child node
+  const size_t mesh_count = json->contains("meshes") ? (*json)["meshes"].size() : 0;
+  std::vector<Grid> grids(mesh_count);  // per mesh its positions' grid (step 0: none)
+  // OCCT writes an instanced part's mesh again for every node that draws it: each mesh equal
+  // to an earlier one (same JSON, same scale) is drawn through the earlier one instead.
+  std::vector<size_t> alias(mesh_count);
+  std::map<std::string, size_t> seen;
   if (json->contains("meshes")) {
     Json& meshes = (*json)["meshes"];
     for (size_t m = 0; m < meshes.size(); ++m) {
+      // Instances' scales differ in the last bits (rotations): nine digits tell them apart; a
+      // copy drawn larger by a rounding error keeps within the 1e-9 the check below allows.
+      char scale[32];
+      std::snprintf(scale, sizeof(scale), "@%.9g", scales[m]);
+      alias[m] = seen.emplace(meshes[m].dump() + scale, m).first->second;
+      if (alias[m] != m && scales[m] <= scales[alias[m]] * (1 + 1e-10)) continue;
+      alias[m] = m;
       std::vector<Primitive> prims;
       for (const Json& source : meshes[m]["primitives"]) {
         Primitive p;
@@ -720,29 +779,11 @@ Status CompressGlb(const Model& model, const MeshResult& result, double max_shif
         return Status(StatusCode::kInternal, "a compressed position moved " +
                                                  std::to_string(shift * scales[m]) + " (allowed " +
                                                  std::to_string(max_shift) + ")");
-      if (grid.step > 0) placed.push_back({static_cast<int>(m), grid});
+      grids[m] = grid;
     }
   }
   PruneMaterials(json);
-  // A quantized mesh is drawn by a child node carrying its grid (KHR_mesh_quantization).
-  if (json->contains("nodes"))
-    for (size_t n = 0, count = (*json)["nodes"].size(); n < count; ++n) {
-      Json& node = (*json)["nodes"][n];
-      if (!node.contains("mesh")) continue;
-      const int mesh = node["mesh"].get<int>();
-      auto found = std::find_if(placed.begin(), placed.end(),
-                                [&](const auto& entry) { return entry.first == mesh; });
-      if (found == placed.end()) continue;
-      const Grid& grid = found->second;
-      Json child = {
-          {"mesh", mesh},
-          {"translation",
-           {grid.origin[0] * grid.step, grid.origin[1] * grid.step, grid.origin[2] * grid.step}}};
-      if (grid.shorts) child["scale"] = {grid.step, grid.step, grid.step};
-      node.erase("mesh");
-      (*json)["nodes"].push_back(child);
-      (*json)["nodes"][n]["children"].push_back((*json)["nodes"].size() - 1);
-    }
+  PlaceGrids(json, alias, grids);
   // Per face id (entry f - 1): its surface type, an index into `surface_types`.
   std::vector<uint8_t> surface(model.face_count(), static_cast<uint8_t>(SurfaceType::kOther));
   for (const FaceMesh& face : result.faces)

@@ -18,12 +18,13 @@ namespace rdmesh {
 ///   fetch (meshopt_optimizeVertexCache, meshopt_optimizeVertexFetchRemap);
 /// - POSITION rounded to a grid, in the mesh's own frame, fine enough that no
 ///   vertex moves farther than `max_shift` (glTF world units, metres) through its nodes'
-///   transforms: 16-bit integers scaled by a child node when they fit, else floats of a
+///   transforms: 16-bit integers scaled by their node (PlaceGrids) when they fit, else floats of a
 ///   power-of-two grid (the EXPONENTIAL filter, exact); `max_shift` 0 keeps the floats;
 /// - NORMAL octahedral-encoded (the OCTAHEDRAL filter, 10 bits in 16-bit integers);
 /// - _FACE_ID and _EDGE_ID 16-bit integers when the ids fit;
 /// - each LINES primitive's edge table (extras.edges) as four binary accessors when that is
 ///   smaller than its JSON;
+/// - meshes that OCCT wrote once per instance written once;
 /// - per face its surface type, and per triangle its estimated deviation when `result`'s faces
 ///   carry it, in binary accessors named by extras.
 /// Every rounded position is decoded again and checked against `max_shift` (kInternal when
