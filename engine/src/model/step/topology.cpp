@@ -930,8 +930,72 @@ bool CopyFace(FaceJob* job) {
 }
 
 // ShapeFix_Face on the copy, set up as ShapeFix_Shell's face tool is under XSAlgo's defaults.
+// Whether `face` lies on a plane, where OCCT keeps no pcurve and projects the 3D curve again on
+// every BRep_Tool::CurveOnSurface call.
+bool OnPlane(const TopoDS_Face& face) {
+  TopLoc_Location location;
+  Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
+  if (auto trimmed = Handle(Geom_RectangularTrimmedSurface)::DownCast(surface))
+    surface = trimmed->BasisSurface();
+  return !Handle(Geom_Plane)::DownCast(surface).IsNull();
+}
+
+// The pcurves StorePlanePcurves stored, held so that no other curve takes their addresses.
+struct StoredPcurves {
+  std::vector<Handle(Geom2d_Curve)> curves;
+  std::set<const Geom2d_Curve*> addresses;
+};
+
+// Stores on each edge of the planar `face` the pcurve BRep_Tool::CurveOnSurface projects, so
+// that the fixing, which asks for each one dozens of times, projects it once.
+StoredPcurves StorePlanePcurves(const TopoDS_Face& face) {
+  StoredPcurves stored;
+  BRep_Builder builder;
+  for (TopExp_Explorer it(face, TopAbs_EDGE); it.More(); it.Next()) {
+    const TopoDS_Edge& edge = TopoDS::Edge(it.Current());
+    double first, last;
+    Standard_Boolean was_stored = Standard_False;
+    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last, &was_stored);
+    if (pcurve.IsNull() || was_stored) continue;
+    double first3d, last3d;
+    if (BRep_Tool::Curve(edge, first3d, last3d).IsNull() || first3d != first || last3d != last)
+      continue;  // only where the stored curve reads back over the same range
+    builder.UpdateEdge(edge, pcurve, face, BRep_Tool::Tolerance(edge));
+    stored.curves.push_back(pcurve);
+    stored.addresses.insert(pcurve.get());
+  }
+  return stored;
+}
+
+// Removes from the edges of `face` (the fixed copy) the pcurves StorePlanePcurves stored, also
+// where the fixing copied an edge: OCCT's reader leaves none on a plane.
+void UnstorePlanePcurves(const TopoDS_Face& face, const StoredPcurves& stored) {
+  if (stored.curves.empty()) return;
+  BRep_Builder builder;
+  TopLoc_Location location;
+  const Handle(Geom_Surface)& surface = BRep_Tool::Surface(face, location);
+  for (TopExp_Explorer it(face, TopAbs_EDGE); it.More(); it.Next()) {
+    const TopoDS_Edge& edge = TopoDS::Edge(it.Current());
+    Handle(BRep_TEdge) te = Handle(BRep_TEdge)::DownCast(edge.TShape());
+    if (te.IsNull()) continue;
+    const TopLoc_Location on = location.Predivided(edge.Location());
+    BRep_ListOfCurveRepresentation& curves = te->ChangeCurves();
+    for (BRep_ListIteratorOfListOfCurveRepresentation c(curves); c.More();) {
+      const Handle(BRep_CurveRepresentation)& rep = c.Value();
+      if (rep->IsCurveOnSurface(surface, on) && !rep->IsCurveOnClosedSurface() &&
+          stored.addresses.count(rep->PCurve().get()) > 0) {
+        curves.Remove(c);
+      } else {
+        c.Next();
+      }
+    }
+  }
+}
+
 void FixFace(FaceJob* job) {
   const UnitFactors& units = job->item->units;
+  const TopoDS_Face local = TopoDS::Face(job->local);
+  const StoredPcurves stored = OnPlane(local) ? StorePlanePcurves(local) : StoredPcurves();
   Handle(ShapeFix_Face) fix = new ShapeFix_Face;
   fix->SetPrecision(units.precision);
   fix->SetMaxTolerance(units.max_tolerance);
@@ -941,6 +1005,9 @@ void FixFace(FaceJob* job) {
   fix->Init(job->local);
   fix->Perform();
   job->healed = job->context->Apply(job->local);
+  if (!job->healed.IsNull() && job->healed.ShapeType() == TopAbs_FACE)
+    UnstorePlanePcurves(TopoDS::Face(job->healed), stored);
+  UnstorePlanePcurves(local, stored);
 }
 
 // The vertex of `edge` with orientation `orientation` (FORWARD or REVERSED), or null.
