@@ -65,7 +65,11 @@ sanitizer_build build-asan address
 export ASAN_OPTIONS="detect_leaks=1:fast_unwind_on_malloc=0:strict_init_order=1:check_initialization_order=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$sanitizers/ubsan.supp"
 export LSAN_OPTIONS="suppressions=$sanitizers/lsan.supp:print_suppressions=0"
-run_sanitized "ASan+UBSan engine_tests" build-asan/bin/engine_tests
+# Not StepTranslateTest.CorpusMatchesOcct: the translator against OCCT's reader on all 51 corpus
+# models takes over 2 minutes in Release and past the 30-minute limit under ASan; the Release run
+# covers it, and StepTranslateTest.BundledFilesMatchOcct runs the same code on the bundled models.
+run_sanitized "ASan+UBSan engine_tests" build-asan/bin/engine_tests \
+  --gtest_filter='-StepTranslateTest.CorpusMatchesOcct'
 run_sanitized "ASan+UBSan server_tests" build-asan/bin/server_tests
 unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
 
