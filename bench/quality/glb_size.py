@@ -9,7 +9,8 @@ For each model, at rdmesh's default deviation (1e-3 of the bounding-box diagonal
 - `rdmesh mesh MODEL -o c.glb --compress` (meshed to 98.5% of the deviation, positions rounded
   by at most 1.5% of it), read back as a viewer reads it (bench/quality/decode_glb.mjs: three.js
   with meshoptimizer's decoder) and measured by the yardstick; and the plain file of the same mesh, `rdmesh mesh MODEL -o p.glb
-  --max-deviation-rel 0.985e-3` (the same triangles, checked), and its .msh, which the yardstick
+  --max-deviation D` with D 98.5% of the compressed run's requested deviation (the same
+  triangles, checked), and its .msh, which the yardstick
   (`meshbench eval`) measures: rdmesh's measured deviation (the rounding adds at most 1.5e-5 of
   the diagonal);
 - BRepMesh (bench/brepmesh_runner, angle 0.5 rad) at a deflection set to that measured deviation,
@@ -95,13 +96,14 @@ def one_model(a, meshbench, model):
     row = {"model": name}
     packed = run_json([rdmesh, "mesh", model, "-o", os.path.join(out, "c.glb"), "--compress",
                        "--json", "-q"])
-    plain_rel = repr(REL * (1 - SHARE))
+    # The absolute deviation the compressed run meshed to, computed as the engine does it.
+    plain_abs = repr(packed["requested_deviation"] * (1 - SHARE))
     plain = run_json([rdmesh, "mesh", model, "-o", os.path.join(out, "p.glb"),
-                      "--max-deviation-rel", plain_rel, "--json", "-q"])
+                      "--max-deviation", plain_abs, "--json", "-q"])
     if plain["triangles"] != packed["triangles"]:
         raise RuntimeError("the plain and compressed meshes differ")
-    run_json([rdmesh, "mesh", model, "-o", os.path.join(out, "p.msh"), "--max-deviation-rel",
-              plain_rel, "--json", "-q"])
+    run_json([rdmesh, "mesh", model, "-o", os.path.join(out, "p.msh"), "--max-deviation",
+              plain_abs, "--json", "-q"])
     row["triangles"] = packed["triangles"]
     row["plain_bytes"] = os.path.getsize(os.path.join(out, "p.glb"))
     row["compressed_bytes"] = os.path.getsize(os.path.join(out, "c.glb"))
@@ -110,7 +112,24 @@ def one_model(a, meshbench, model):
     decoded_msh(a, os.path.join(out, "c.glb"), os.path.join(out, "c.msh"))
     row["compressed_measured_rel"] = measure(meshbench, model, os.path.join(out, "c.msh"))
     diagonal = packed["requested_deviation"] / REL
+    try:
+        row.update(occt_row(a, meshbench, model, out, target, diagonal))
+    except (RuntimeError, subprocess.TimeoutExpired, ValueError, KeyError) as error:
+        row["occt_error"] = str(error)
+    run_json([rdmesh, "mesh", model, "-o", os.path.join(out, "l.glb"), "--compress", "--lod",
+              LEVELS, "--json", "-q"])
+    row["level_bytes"] = [os.path.getsize(os.path.join(out, "l.lod%d.glb" % i))
+                          for i in range(len(LEVELS.split(",")))]
+    return row
+
+
+def occt_row(a, meshbench, model, out, target, diagonal):
+    """BRepMesh at the deflection whose measured deviation is nearest `target`, written by
+    OCCT's glTF writer."""
     tries = []
+    # A mesh that lies on its faces (planes only) measures about 0: aim at the request then.
+    if target < 1e-3 * REL:
+        target = REL
     deflection = target * diagonal
     for _ in range(2):
         b = run_json([os.path.join(a.build, "bin", "brepmesh_runner"), model, repr(deflection),
@@ -124,13 +143,8 @@ def one_model(a, meshbench, model):
     _, deflection, measured, triangles = min(tries)
     occt = run_json([os.path.join(a.build, "bin", "occt_glb_runner"), model, repr(deflection),
                      str(ANGLE), os.path.join(out, "o.glb")])
-    row.update(occt_deflection=deflection, occt_measured_rel=measured, occt_triangles=triangles,
-               occt_bytes=occt["bytes"])
-    run_json([rdmesh, "mesh", model, "-o", os.path.join(out, "l.glb"), "--compress", "--lod",
-              LEVELS, "--json", "-q"])
-    row["level_bytes"] = [os.path.getsize(os.path.join(out, "l.lod%d.glb" % i))
-                          for i in range(len(LEVELS.split(",")))]
-    return row
+    return dict(occt_deflection=deflection, occt_measured_rel=measured, occt_triangles=triangles,
+                occt_bytes=occt["bytes"])
 
 
 def geomean(values):
@@ -138,15 +152,17 @@ def geomean(values):
     return math.exp(sum(math.log(v) for v in values) / len(values)) if values else float("nan")
 
 
-def table(rows, command):
+def table(rows, commands):
     ok = [r for r in rows if "error" not in r]
+    occ = [r for r in ok if "occt_bytes" in r]
     lines = [
         "# .glb bytes per triangle (issue 37)",
         "",
-        "Made by `%s` (%s, commit %s), on the %d corpus models of ../shared/corpus at rdmesh's "
+        "Made by %s (%s, commit %s), on the %d corpus models of ../shared/corpus at rdmesh's "
         "default deviation, 1e-3 of the bounding-box diagonal. What each column is: the script's "
-        "docstring (bench/quality/glb_size.py)." % (command, time.strftime("%Y-%m-%d"),
-                                                    git_commit(), len(rows)),
+        "docstring (bench/quality/glb_size.py)." % (
+            ", then ".join("`%s`" % c for c in commands), time.strftime("%Y-%m-%d"),
+            git_commit(), len(rows)),
         "",
         "- **plain**: `rdmesh mesh` .glb of the mesh that `--compress` writes (the same "
         "triangles: --compress meshes to 98.5% of the deviation), edges included;",
@@ -161,21 +177,21 @@ def table(rows, command):
     ]
     if ok:
         total_t = sum(r["triangles"] for r in ok)
-        total_o = sum(r["occt_triangles"] for r in ok)
+        total_o = sum(r["occt_triangles"] for r in occ)
         lines += [
-            "| over %d models | plain | compressed | OCCT |" % len(ok),
+            "| over %d models (OCCT: %d) | plain | compressed | OCCT |" % (len(ok), len(occ)),
             "|---|---|---|---|",
             "| bytes per triangle, all files together | %.1f | **%.1f** | %.1f |" % (
                 sum(r["plain_bytes"] for r in ok) / total_t,
                 sum(r["compressed_bytes"] for r in ok) / total_t,
-                sum(r["occt_bytes"] for r in ok) / total_o),
+                sum(r["occt_bytes"] for r in occ) / total_o),
             "| bytes per triangle, geometric mean over models | %.1f | **%.1f** | %.1f |" % (
                 geomean([r["plain_bytes"] / r["triangles"] for r in ok]),
                 geomean([r["compressed_bytes"] / r["triangles"] for r in ok]),
-                geomean([r["occt_bytes"] / r["occt_triangles"] for r in ok])),
+                geomean([r["occt_bytes"] / r["occt_triangles"] for r in occ])),
             "| bytes of the file / compressed, geometric mean | %.2fx | 1 | %.2fx |" % (
                 geomean([r["plain_bytes"] / r["compressed_bytes"] for r in ok]),
-                geomean([r["occt_bytes"] / r["compressed_bytes"] for r in ok])),
+                geomean([r["occt_bytes"] / r["compressed_bytes"] for r in occ])),
             "| compressed / plain: median, largest | | %.3f, %.3f | |" % (
                 statistics.median(r["compressed_bytes"] / r["plain_bytes"] for r in ok),
                 max(r["compressed_bytes"] / r["plain_bytes"] for r in ok)),
@@ -186,7 +202,7 @@ def table(rows, command):
             "| measured deviation / 1e-3, largest (compressed: as decoded) | %.3f | %.3f | %.3f |" % (
                 max(r["rdmesh_measured_rel"] for r in ok) / REL,
                 max(r["compressed_measured_rel"] for r in ok) / REL,
-                max(r["occt_measured_rel"] for r in ok) / REL),
+                max(r["occt_measured_rel"] for r in occ) / REL),
             "| levels %s, bytes / finest level, geometric mean | | %s | |" % (
                 LEVELS, " / ".join("%.3f" % geomean([r["level_bytes"][i] / r["level_bytes"][-1]
                                                       for r in ok])
@@ -203,12 +219,14 @@ def table(rows, command):
             lines.append("| %s | failed: %s ||||||||||" % (
                 r["model"], " ".join(r["error"].replace("|", "/").split())[:200]))
             continue
-        lines.append("| %s | %d | %.1f | %.1f | %.3f | %.2e | %.2e | %d | %.2e | %.1f | %s |" % (
+        occt = ("%d | %.2e | %.1f" % (r["occt_triangles"], r["occt_measured_rel"],
+                                       r["occt_bytes"] / r["occt_triangles"])
+                if "occt_bytes" in r else "failed: %s | | " % " ".join(
+                    r["occt_error"].replace("|", "/").split())[:120])
+        lines.append("| %s | %d | %.1f | %.1f | %.3f | %.2e | %.2e | %s | %s |" % (
             r["model"], r["triangles"], r["plain_bytes"] / r["triangles"],
             r["compressed_bytes"] / r["triangles"], r["compressed_bytes"] / r["plain_bytes"],
-            r["rdmesh_measured_rel"], r["compressed_measured_rel"], r["occt_triangles"],
-            r["occt_measured_rel"],
-            r["occt_bytes"] / r["occt_triangles"],
+            r["rdmesh_measured_rel"], r["compressed_measured_rel"], occt,
             " / ".join("%.2f" % (b / r["level_bytes"][-1]) for b in r["level_bytes"][:-1])))
     return "\n".join(lines) + "\n"
 
@@ -227,6 +245,8 @@ def main():
                     "the CLI tests leave it)")
     ap.add_argument("--out", default="/tmp/rdmesh-glb-size", help="directory for the files")
     ap.add_argument("--table", default=os.path.join(REPO, "bench", "GLB.md"))
+    ap.add_argument("--update", action="store_true",
+                    help="measure only MODELs again and replace their rows in the table's JSON")
     ap.add_argument("models", nargs="*", help="default: every ../shared/corpus/*.st*p")
     a = ap.parse_args()
     a.node_dir = os.path.abspath(a.node_dir or os.path.join(a.build, "node_tools"))
@@ -235,22 +255,27 @@ def main():
     meshbench = os.path.join(built, "meshbench")
     models = a.models or sorted(glob.glob(os.path.join(SHARED, "corpus", "*.st*p")))
     command = "/usr/bin/python3 bench/quality/glb_size.py " + " ".join(sys.argv[1:])
-    rows = []
+    rows, commands = [], [command.strip()]
+    if a.update:
+        with open(os.path.splitext(a.table)[0] + ".json") as f:
+            saved = json.load(f)
+        rows, commands = saved["rows"], saved["commands"] + commands
     for model in models:
         start = time.time()
         try:
             row = one_model(a, meshbench, model)
         except (RuntimeError, subprocess.TimeoutExpired, ValueError, KeyError) as error:
             row = {"model": os.path.splitext(os.path.basename(model))[0], "error": str(error)}
-        rows.append(row)
+        rows = [r for r in rows if r["model"] != row["model"]] + [row]
+        rows.sort(key=lambda r: r["model"])
         print("%-45s %5.1f s  %s" % (row["model"], time.time() - start,
                                      row.get("error") or "%.3f" % (row["compressed_bytes"] /
                                                                    row["plain_bytes"])),
               flush=True)
         with open(os.path.splitext(a.table)[0] + ".json", "w") as f:
-            json.dump(rows, f, indent=1)
+            json.dump({"commands": commands, "rows": rows}, f, indent=1)
         with open(a.table, "w") as f:
-            f.write(table(rows, command.strip()))
+            f.write(table(rows, commands))
 
 
 if __name__ == "__main__":
