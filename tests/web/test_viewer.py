@@ -193,7 +193,8 @@ def test_viewer_in_chromium(site, server, chromium, tmp_path):
     report = rdmesh("mesh", model, "-o", site / "model.glb", "--compress", "--json")
     # The plain file of the same mesh, loaded by three.js in node: the independent reference.
     plain = tmp_path / "plain.glb"
-    rdmesh("mesh", model, "-o", plain, "--max-deviation-rel", repr(1e-3 * (1 - SHARE)))
+    rdmesh("mesh", model, "-o", plain, "--max-deviation",
+           repr(report["requested_deviation"] * (1 - SHARE)))
     cli = _cli_fixtures()
     reference = cli._node_script("three", "three_load.mjs", cli.THREE_LOAD_MJS)(plain)
     triangles = triangles_of(reference)
