@@ -314,10 +314,19 @@ def test_compressed_instanced_assembly(run, shared_dir, tmp_path, gltf_validate,
     assert gltf_validate(packed)["errors"] == 0
     a, b = three_load(plain), three_meshopt(packed)
     assert any("face_map" in o for o in b["objects"])
-    # OCCT writes a mesh per node; the compressed file keeps one of equal copies.
-    drawn = sum("mesh" in n for n in glb_json(packed)["nodes"])
-    assert drawn == sum("mesh" in n for n in glb_json(plain)["nodes"])
-    assert len(glb_json(packed)["meshes"]) < len(glb_json(plain)["meshes"]) == drawn
+    # OCCT writes a mesh per node; the compressed file keeps one of equal copies. The solids'
+    # edge meshes become one.
+    def drawn(layout, mode):
+        return [n["mesh"] for n in layout["nodes"] if "mesh" in n and
+                layout["meshes"][n["mesh"]]["primitives"][0].get("mode", 4) == mode]
+
+    p_layout, c_layout = glb_json(plain), glb_json(packed)
+    assert len(drawn(c_layout, 4)) == len(drawn(p_layout, 4))
+    assert len(set(drawn(c_layout, 4))) < len(set(drawn(p_layout, 4))) == len(drawn(p_layout, 4))
+    assert len(drawn(c_layout, 1)) == 1 < len(drawn(p_layout, 1))
+    groups = c_layout["meshes"][drawn(c_layout, 1)[0]]["primitives"][0]["extras"]["groups"]
+    assert [g["name"] for g in groups] == [p_layout["meshes"][m]["name"]
+                                           for m in drawn(p_layout, 1)]
     same_elements(corners(a, "triangles"), corners(b, "triangles"),
                   0.02 * report["requested_deviation"] * 1e-3, 3)
 

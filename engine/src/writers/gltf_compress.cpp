@@ -718,6 +718,94 @@ void PlaceGrids(Json* json, const std::vector<size_t>& alias, const std::vector<
     if (node.contains("mesh")) node["mesh"] = index[node["mesh"].get<size_t>()];
 }
 
+// The plain file draws each solid's edges through a node and a mesh of their own under the root
+// node "edges"; the compressed one draws them all through the first, which saves a node, a mesh
+// and their accessors per solid. `meshes`: the solids' edge meshes (the first kept); `drop`: the
+// other child nodes.
+struct EdgeMerge {
+  std::vector<size_t> meshes;
+  size_t keep = 0;
+  std::set<size_t> drop;
+};
+
+EdgeMerge FindEdgeMeshes(const Json& json) {
+  if (!json.contains("nodes") || !json.contains("meshes")) return {};
+  const Json& nodes = json["nodes"];
+  for (const Json& node : nodes) {
+    if (node.value("name", "") != "edges" || !node.contains("children") || node.contains("mesh"))
+      continue;
+    EdgeMerge merge;
+    for (const Json& c : node["children"]) {
+      const Json& child = nodes[c.get<size_t>()];
+      if (!child.contains("mesh") || child.contains("children") || child.contains("matrix") ||
+          child.contains("translation") || child.contains("rotation") || child.contains("scale"))
+        return {};
+      const Json& primitives = json["meshes"][child["mesh"].get<size_t>()]["primitives"];
+      if (primitives.size() != 1 || primitives[0].value("mode", kTriangles) != kLines) return {};
+      merge.meshes.push_back(child["mesh"].get<size_t>());
+      if (merge.meshes.size() == 1)
+        merge.keep = c.get<size_t>();
+      else
+        merge.drop.insert(c.get<size_t>());
+    }
+    if (merge.meshes.size() < 2) return {};
+    return merge;
+  }
+  return {};
+}
+
+// Removes the nodes `drop` (no mesh of theirs is drawn elsewhere) and renumbers the others.
+void RemoveNodes(Json* json, const std::set<size_t>& drop) {
+  Json& nodes = (*json)["nodes"];
+  std::vector<int64_t> index(nodes.size(), -1);
+  Json kept = Json::array();
+  for (size_t n = 0; n < nodes.size(); ++n)
+    if (!drop.count(n)) {
+      index[n] = static_cast<int64_t>(kept.size());
+      kept.push_back(std::move(nodes[n]));
+    }
+  auto remap = [&](Json* list) {
+    Json out = Json::array();
+    for (const Json& n : *list)
+      if (index[n.get<size_t>()] >= 0) out.push_back(index[n.get<size_t>()]);
+    *list = std::move(out);
+  };
+  for (Json& node : kept)
+    if (node.contains("children")) remap(&node["children"]);
+  nodes = std::move(kept);
+  if (json->contains("scenes"))
+    for (Json& scene : (*json)["scenes"])
+      if (scene.contains("nodes")) remap(&scene["nodes"]);
+}
+
+// The solids' edge primitives as one: vertices and segments one solid after the other, the
+// edge tables concatenated, and extras.groups naming each solid's range of segments.
+Status ReadMergedEdges(const Json& json, const std::string& bin, const EdgeMerge& merge,
+                       Primitive* merged) {
+  Json edges = Json::array(), groups = Json::array();
+  bool tables = true;
+  for (size_t k = 0; k < merge.meshes.size(); ++k) {
+    const Json& mesh = json["meshes"][merge.meshes[k]];
+    Primitive p;
+    if (!ReadPrimitive(json, bin, &mesh["primitives"][0], &p) || p.edge_id.empty())
+      return Status(StatusCode::kInternal, "unexpected edge lines");
+    if (k == 0) merged->json = p.json, merged->mode = kLines;
+    const auto base = static_cast<uint32_t>(merged->position.size() / 3);
+    groups.push_back({{"name", mesh.value("name", "")},
+                      {"segments", {merged->indices.size() / 2, p.indices.size() / 2}}});
+    for (uint32_t i : p.indices) merged->indices.push_back(base + i);
+    merged->position.insert(merged->position.end(), p.position.begin(), p.position.end());
+    merged->edge_id.insert(merged->edge_id.end(), p.edge_id.begin(), p.edge_id.end());
+    if (p.json.contains("extras") && p.json["extras"].contains("edges"))
+      for (const Json& e : p.json["extras"]["edges"]) edges.push_back(e);
+    else
+      tables = false;
+  }
+  if (tables) merged->json["extras"]["edges"] = std::move(edges);
+  merged->json["extras"]["groups"] = std::move(groups);
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status CompressGlb(const Model& model, const MeshResult& result, double max_shift,
@@ -732,9 +820,20 @@ Status CompressGlb(const Model& model, const MeshResult& result, double max_shif
   // to an earlier one (same JSON, same scale) is drawn through the earlier one instead.
   std::vector<size_t> alias(mesh_count);
   std::map<std::string, size_t> seen;
+  const EdgeMerge edges = FindEdgeMeshes(*json);
+  if (!edges.meshes.empty()) {
+    (*json)["nodes"][edges.keep]["name"] = "edges of every solid";
+    RemoveNodes(json, edges.drop);
+  }
   if (json->contains("meshes")) {
     Json& meshes = (*json)["meshes"];
     for (size_t m = 0; m < meshes.size(); ++m) {
+      const bool edge_mesh =
+          std::find(edges.meshes.begin(), edges.meshes.end(), m) != edges.meshes.end();
+      if (edge_mesh && m != edges.meshes[0]) {
+        alias[m] = edges.meshes[0];  // drawn by no node any more: dropped with the copies
+        continue;
+      }
       // Instances' scales differ in the last bits (rotations): nine digits tell them apart; a
       // copy drawn larger by a rounding error keeps within the 1e-9 the check below allows.
       char scale[32];
@@ -743,7 +842,14 @@ Status CompressGlb(const Model& model, const MeshResult& result, double max_shif
       if (alias[m] != m && scales[m] <= scales[alias[m]] * (1 + 1e-10)) continue;
       alias[m] = m;
       std::vector<Primitive> prims;
+      if (edge_mesh) {
+        prims.emplace_back();
+        if (!ReadMergedEdges(*json, *bin, edges, &prims.back()).ok())
+          return WriteError(path, "unexpected edge lines from the glTF writer");
+        meshes[m]["name"] = "edges of every solid";
+      }
       for (const Json& source : meshes[m]["primitives"]) {
+        if (edge_mesh) break;
         Primitive p;
         if (!ReadPrimitive(*json, *bin, &source, &p))
           return WriteError(path, "unexpected primitive layout from the glTF writer");

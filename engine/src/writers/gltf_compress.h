@@ -24,7 +24,7 @@ namespace rdmesh {
 /// - _FACE_ID and _EDGE_ID 16-bit integers when the ids fit;
 /// - each LINES primitive's edge table (extras.edges) as four binary accessors when that is
 ///   smaller than its JSON;
-/// - meshes that OCCT wrote once per instance written once;
+/// - meshes that OCCT wrote once per instance written once; the solids' edge lines one mesh;
 /// - per face its surface type, and per triangle its estimated deviation when `result`'s faces
 ///   carry it, in binary accessors named by extras.
 /// Every rounded position is decoded again and checked against `max_shift` (kInternal when
