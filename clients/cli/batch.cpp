@@ -830,6 +830,9 @@ int RunBatch(const BatchFlags& flags, int (*main)(int argc, char** argv)) {
   const std::vector<std::string> formats = SupportedOutputFormats();
   if (std::find(formats.begin(), formats.end(), "." + format) == formats.end())
     return usage("--format " + flags.format + ": not an output format");
+  // As `rdmesh mesh` refuses it: without a .glb it would only mesh finer.
+  if (flags.mesh.write.compress && format != "glb")
+    return usage("--compress writes .glb only (--format " + format + ")");
   if (flags.jobs < 0) return usage("--jobs must be 0 (all cores) or more");
   BatchFlags resolved = flags;
   resolved.format = format;

@@ -514,3 +514,13 @@ def test_progress_on_a_terminal(cli, fake, tmp_path):
     # The summary: counts per status, throughput, the slowest files.
     assert "ok 6 failed 0 crashed 1 timed_out 0 unreadable 0" in stdout
     assert "files/min" in stdout and "slowest:" in stdout
+
+
+def test_compress_needs_glb(cli, data_dir, tmp_path):
+    code, _, err = batch(cli, data_dir / GOOD[0], "-o", tmp_path / "out", "--format", "msh",
+                         "--compress")
+    assert code == 2 and "--compress writes .glb only" in err
+    code, summary, _ = batch(cli, data_dir / GOOD[0], "-o", tmp_path / "out2", "--compress")
+    assert code == 0 and summary["counts"]["ok"] == 1
+    out = next((tmp_path / "out2").rglob("*.glb"))
+    assert b"EXT_meshopt_compression" in out.read_bytes()[:65536]
