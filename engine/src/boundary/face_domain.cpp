@@ -292,6 +292,19 @@ int VertexNode(const FaceDomain& d, const std::vector<int>& nodes, Vec2 uv, doub
   return nearest;
 }
 
+// Whether edge grid `g` has no length: every point of it within its vertex's tolerance of the
+// vertex. Such an edge runs from a point to itself (the LED_D3.0mm
+// models of KiCad's library carry one in a planar face's outline); its ends' (u,v) may differ by
+// rounding, and two nodes there make the loop's segments either side touch.
+bool NoLength(const Model& model, const EdgeGrid& g, int vertex) {
+  const TopoDS_Vertex& v = TopoDS::Vertex(model.vertices(vertex));
+  const gp_Pnt p = BRep_Tool::Pnt(v);
+  const double tolerance = BRep_Tool::Tolerance(v);
+  for (const Vec3& q : g.xyz)
+    if (p.Distance(gp_Pnt(q.x, q.y, q.z)) > tolerance) return false;
+  return !g.xyz.empty();
+}
+
 // Whether grid segment `k` of edge `a` and grid segment `l` of edge `b` lie on each other in 3D:
 // their middles within the two edges' tolerances.
 bool OnEachOther(const Model& model, const std::vector<EdgeGrid>& grids, int a, int k, int b,
@@ -414,6 +427,13 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
         const int after = i == m - 1 && k == n - 2 && !loop.empty() ? loop.front() : -1;
         int node =
             ref.dim == 0 ? VertexNode(*d, vertex_nodes[ref.entity], uv, slack, before, after) : -1;
+        // The same vertex again after an edge of no length whose ends' (u,v) differ by rounding
+        // only (a pole's degenerated edge spans a real (u,v) segment and stays): one node.
+        if (node < 0 && ref.dim == 0 && !loop.empty() && d->ref[loop.back()].dim == 0 &&
+            d->ref[loop.back()].entity == ref.entity &&
+            std::hypot(d->uv[loop.back()].x - uv.x, d->uv[loop.back()].y - uv.y) <= 1e-6 * slack &&
+            NoLength(model, grids[seg_edge.back() - 1], ref.entity))
+          node = loop.back();
         if (node >= 0 && !loop.empty() && node == loop.back()) {
           // Both ends of an edge at one (u,v): its segment of no length goes, and the node goes
           // on with this walk's segment.
