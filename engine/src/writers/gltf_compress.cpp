@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "writers/gltf_constants.h"
 #include "writers/output_file.h"
 
 namespace rdmesh {
@@ -22,16 +23,16 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-constexpr int kByte = 5120;
-constexpr int kUnsignedByte = 5121;
-constexpr int kShort = 5122;
-constexpr int kUnsignedShort = 5123;
-constexpr int kUnsignedInt = 5125;
-constexpr int kFloat = 5126;
-constexpr int kArrayBuffer = 34962;
-constexpr int kElementArrayBuffer = 34963;
-constexpr int kTriangles = 4;
-constexpr int kLines = 1;
+using gltf::kArrayBuffer;
+using gltf::kByte;
+using gltf::kElementArrayBuffer;
+using gltf::kFloat;
+using gltf::kLines;
+using gltf::kShort;
+using gltf::kTriangles;
+using gltf::kUnsignedByte;
+using gltf::kUnsignedInt;
+using gltf::kUnsignedShort;
 // Octahedral normals in 16-bit integers: 10 bits keep them within 0.21 degrees of the exact
 // normals on nist_ctc_02 (docs/GLB.md), which shading cannot show; 12 cost 2-3% more file.
 constexpr int kNormalBits = 10;

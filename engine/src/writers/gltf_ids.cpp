@@ -19,6 +19,7 @@
 
 #include "rdmesh/options.h"
 #include "writers/gltf_compress.h"
+#include "writers/gltf_constants.h"
 #include "writers/output_file.h"
 
 namespace rdmesh {
@@ -27,13 +28,13 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-constexpr int kFloat = 5126;
-constexpr int kUnsignedInt = 5125;
-constexpr int kArrayBuffer = 34962;
-constexpr int kElementArrayBuffer = 34963;
-constexpr int kLines = 1;
-constexpr uint32_t kJsonChunk = 0x4E4F534A;  // "JSON"
-constexpr uint32_t kBinChunk = 0x004E4942;   // "BIN\0"
+using gltf::kArrayBuffer;
+using gltf::kBinChunk;
+using gltf::kElementArrayBuffer;
+using gltf::kFloat;
+using gltf::kJsonChunk;
+using gltf::kLines;
+using gltf::kUnsignedInt;
 
 struct Glb {
   Json json;
