@@ -297,11 +297,10 @@ int VertexNode(const FaceDomain& d, const std::vector<int>& nodes, Vec2 uv, doub
 // models of KiCad's library carry one in a planar face's outline); its ends' (u,v) may differ by
 // rounding, and two nodes there make the loop's segments either side touch.
 bool NoLength(const Model& model, const EdgeGrid& g, int vertex) {
-  const TopoDS_Vertex& v = TopoDS::Vertex(model.vertices(vertex));
-  const gp_Pnt p = BRep_Tool::Pnt(v);
-  const double tolerance = BRep_Tool::Tolerance(v);
+  const Vec3 p = VertexPoint(model, vertex);
+  const double tolerance = BRep_Tool::Tolerance(TopoDS::Vertex(model.vertices(vertex)));
   for (const Vec3& q : g.xyz)
-    if (p.Distance(gp_Pnt(q.x, q.y, q.z)) > tolerance) return false;
+    if (Dist(p, q) > tolerance) return false;
   return !g.xyz.empty();
 }
 

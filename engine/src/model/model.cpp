@@ -4,8 +4,6 @@
 #include <BRepLib.hxx>
 #include <BRep_Tool.hxx>
 #include <GProp_GProps.hxx>
-#include <Geom_Plane.hxx>
-#include <Geom_RectangularTrimmedSurface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -20,6 +18,7 @@
 #include <vector>
 
 #include "core/parallel.h"
+#include "geometry/surface_type.h"
 #include "model/model_info.h"
 #include "model/model_payload.h"
 #include "model/model_readers.h"
@@ -138,11 +137,7 @@ std::string InnermostReason(const std::string& message) {
 void StorePlanePcurves(Model* model) {
   for (int f = 1; f <= model->face_count(); ++f) {
     const TopoDS_Face& face = model->face(f);
-    TopLoc_Location location;
-    Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
-    if (auto trimmed = Handle(Geom_RectangularTrimmedSurface)::DownCast(surface))
-      surface = trimmed->BasisSurface();
-    if (Handle(Geom_Plane)::DownCast(surface).IsNull()) continue;
+    if (FaceSurfaceType(face) != SurfaceType::kPlane) continue;
     for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
       try {
         BRepLib::BuildPCurveForEdgeOnPlane(TopoDS::Edge(ex.Current()), face);

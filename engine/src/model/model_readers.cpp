@@ -128,6 +128,9 @@ Status ParseError(const std::string& name, const std::string& reason) {
   return Status(StatusCode::kParseError, "cannot read '" + name + "': " + reason);
 }
 
+// The model is not to blame: the reader ran out of memory.
+Status OutOfMemory(const std::string& name) { return OutOfMemory(name); }
+
 // The text after leading whitespace and a UTF-8 byte order mark.
 size_t ContentStart(const std::string& bytes) {
   size_t i = bytes.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
@@ -400,7 +403,7 @@ Result<ReadShape> ReadStep(const std::string& bytes, const std::string& name,
       if (!own.ok()) return own.status();
       if (own->has_value()) return std::move(**own);
     } catch (const Standard_OutOfMemory&) {
-      return Status(StatusCode::kResourceExhausted, "cannot read '" + name + "': out of memory");
+      return OutOfMemory(name);
     } catch (const Standard_Failure& failure) {
       fallback = std::string("own reader failed: ") + failure.DynamicType()->Name();
     }
@@ -580,9 +583,9 @@ Result<ReadShape> ReadModelBytes(const std::string& bytes, ModelFormat format,
     }
     return ParseError(name, "unknown model format");
   } catch (const Standard_OutOfMemory&) {
-    return Status(StatusCode::kResourceExhausted, "cannot read '" + name + "': out of memory");
+    return OutOfMemory(name);
   } catch (const std::bad_alloc&) {
-    return Status(StatusCode::kResourceExhausted, "cannot read '" + name + "': out of memory");
+    return OutOfMemory(name);
   } catch (const Standard_Failure& failure) {
     const char* what = failure.GetMessageString();
     return ParseError(

@@ -71,6 +71,15 @@ using testing::Grids;
 
 double MeshArea(const FaceMesh& f) { return f.area; }
 
+// Watertight: every edge of the triangles (a flat index array) is used by exactly two of them.
+void ExpectEveryEdgeUsedTwice(const std::vector<int32_t>& t) {
+  std::map<std::pair<int, int>, int> uses;
+  for (size_t k = 0; k < t.size(); k += 3)
+    for (int i = 0; i < 3; ++i)
+      ++uses[{std::min(t[k + i], t[k + (i + 1) % 3]), std::max(t[k + i], t[k + (i + 1) % 3])}];
+  for (const auto& [edge, n] : uses) EXPECT_EQ(n, 2);
+}
+
 // Meshes `shape` (a model named `name`) at an absolute max deviation (0: the default relative
 // one) into *faces; failing to load or mesh it fails the test.
 void MeshFaces(const TopoDS_Shape& shape, const std::string& name, double max_deviation,
@@ -567,12 +576,7 @@ TEST(FaceDomainTest, ALoopOverTwoTurnsIsMeshedOnceWithoutItsDegenerateEdges) {
   // Pappus: the arc's length times the turn of its centroid, 2 + 1 / pi from the axis.
   const double once = (M_PI / 4) * 2 * M_PI * (2 + 1 / M_PI);
   EXPECT_NEAR(result->faces[ring - 1].area, once, 0.01 * once);
-  std::map<std::pair<int, int>, int> uses;
-  const std::vector<int32_t>& t = result->mesh.triangles;
-  for (size_t k = 0; k < t.size(); k += 3)
-    for (int i = 0; i < 3; ++i)
-      ++uses[{std::min(t[k + i], t[k + (i + 1) % 3]), std::max(t[k + i], t[k + (i + 1) % 3])}];
-  for (const auto& [edge, n] : uses) EXPECT_EQ(n, 2);
+  ExpectEveryEdgeUsedTwice(result->mesh.triangles);
 }
 
 // A pin (a cylinder of radius 0.05, 1 long) written as NXP_MPL115A1's fillets were (issue 35): its
@@ -634,12 +638,7 @@ TEST(FaceDomainTest, AnEdgeOnItsFacesIsMeshedByItsCurveWhateverItsTolerance) {
     EXPECT_LE(f.max_deviation, deviation * (1 + 1e-9)) << "face " << f.face_id;
   }
   EXPECT_LE(result->summary.triangles, 100);
-  std::map<std::pair<int, int>, int> uses;
-  const std::vector<int32_t>& t = result->mesh.triangles;
-  for (size_t k = 0; k < t.size(); k += 3)
-    for (int i = 0; i < 3; ++i)
-      ++uses[{std::min(t[k + i], t[k + (i + 1) % 3]), std::max(t[k + i], t[k + (i + 1) % 3])}];
-  for (const auto& [edge, n] : uses) EXPECT_EQ(n, 2);
+  ExpectEveryEdgeUsedTwice(result->mesh.triangles);
 }
 
 }  // namespace

@@ -66,6 +66,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -75,6 +76,7 @@
 #include <vector>
 
 #include "core/parallel.h"
+#include "geometry/surface_type.h"
 #include "model/step/finish.h"
 
 namespace rdmesh::step {
@@ -932,19 +934,10 @@ bool CopyFace(FaceJob* job) {
 // ShapeFix_Face on the copy, set up as ShapeFix_Shell's face tool is under XSAlgo's defaults.
 // Whether `face` lies on a plane, where OCCT keeps no pcurve and projects the 3D curve again on
 // every BRep_Tool::CurveOnSurface call.
-bool OnPlane(const TopoDS_Face& face) {
-  TopLoc_Location location;
-  Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
-  if (auto trimmed = Handle(Geom_RectangularTrimmedSurface)::DownCast(surface))
-    surface = trimmed->BasisSurface();
-  return !Handle(Geom_Plane)::DownCast(surface).IsNull();
-}
+bool OnPlane(const TopoDS_Face& face) { return FaceSurfaceType(face) == SurfaceType::kPlane; }
 
-// The pcurves StorePlanePcurves stored, held so that no other curve takes their addresses.
-struct StoredPcurves {
-  std::vector<Handle(Geom2d_Curve)> curves;
-  std::set<const Geom2d_Curve*> addresses;
-};
+// The pcurves StorePlanePcurves stored, by address, held so that no other curve takes one.
+using StoredPcurves = std::map<const Geom2d_Curve*, Handle(Geom2d_Curve)>;
 
 // Stores on each edge of the planar `face` the pcurve BRep_Tool::CurveOnSurface projects, so
 // that the fixing, which asks for each one dozens of times, projects it once.
@@ -961,8 +954,7 @@ StoredPcurves StorePlanePcurves(const TopoDS_Face& face) {
     if (BRep_Tool::Curve(edge, first3d, last3d).IsNull() || first3d != first || last3d != last)
       continue;  // only where the stored curve reads back over the same range
     builder.UpdateEdge(edge, pcurve, face, BRep_Tool::Tolerance(edge));
-    stored.curves.push_back(pcurve);
-    stored.addresses.insert(pcurve.get());
+    stored.emplace(pcurve.get(), pcurve);
   }
   return stored;
 }
@@ -970,7 +962,7 @@ StoredPcurves StorePlanePcurves(const TopoDS_Face& face) {
 // Removes from the edges of `face` (the fixed copy) the pcurves StorePlanePcurves stored, also
 // where the fixing copied an edge: OCCT's reader leaves none on a plane.
 void UnstorePlanePcurves(const TopoDS_Face& face, const StoredPcurves& stored) {
-  if (stored.curves.empty()) return;
+  if (stored.empty()) return;
   BRep_Builder builder;
   TopLoc_Location location;
   const Handle(Geom_Surface)& surface = BRep_Tool::Surface(face, location);
@@ -983,7 +975,7 @@ void UnstorePlanePcurves(const TopoDS_Face& face, const StoredPcurves& stored) {
     for (BRep_ListIteratorOfListOfCurveRepresentation c(curves); c.More();) {
       const Handle(BRep_CurveRepresentation)& rep = c.Value();
       if (rep->IsCurveOnSurface(surface, on) && !rep->IsCurveOnClosedSurface() &&
-          stored.addresses.count(rep->PCurve().get()) > 0) {
+          stored.count(rep->PCurve().get()) > 0) {
         curves.Remove(c);
       } else {
         c.Next();
