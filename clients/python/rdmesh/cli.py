@@ -1,5 +1,5 @@
-"""rdmesh-py: health, info, status and mesh through an rdmeshd server; view draws a mesh
-coloured by its estimated deviation."""
+"""rdmesh-py: health, info, status, mesh and batch (a dataset) through an rdmeshd server; view
+draws a mesh coloured by its estimated deviation."""
 
 import argparse
 import json
@@ -127,12 +127,34 @@ def cmd_info(args):
     return 0
 
 
+def _add_mesh_options(parser):
+    parser.add_argument("--max-deviation", type=float,
+                        help="absolute max deviation, model units")
+    parser.add_argument("--max-deviation-rel", type=float,
+                        help="max deviation as a fraction of the bbox diagonal (default 1e-3)")
+    parser.add_argument("--rd-tolerance", type=float, help="representation-deficit tolerance")
+    parser.add_argument("--max-triangles", type=int, help="triangle budget for the whole model")
+    parser.add_argument("--min-edge-length", type=float, help="model units")
+    parser.add_argument("--max-edge-length", type=float, help="model units")
+    parser.add_argument("--nurbs", action="store_true", help="convert faces to B-splines first")
+    parser.add_argument("--threads", type=int, help="worker threads (capped by the server)")
+    parser.add_argument("--faces", help="comma-separated face ids to mesh (default all)")
+
+
+def _mesh_options(args):
+    """The mesh options of _add_mesh_options' flags, as Client.mesh() keyword arguments."""
+    try:
+        faces = [int(f) for f in args.faces.split(",")] if args.faces else None
+    except ValueError:
+        raise ValueError("--faces: give face ids like 1,2,5") from None
+    return dict(max_deviation=args.max_deviation, max_deviation_rel=args.max_deviation_rel,
+                rd_tolerance=args.rd_tolerance, max_triangles=args.max_triangles,
+                min_edge_length=args.min_edge_length, max_edge_length=args.max_edge_length,
+                nurbs=args.nurbs or None, threads=args.threads, face_ids=faces)
+
+
 def cmd_mesh(args):
-    options = dict(max_deviation=args.max_deviation, max_deviation_rel=args.max_deviation_rel,
-                   rd_tolerance=args.rd_tolerance, max_triangles=args.max_triangles,
-                   min_edge_length=args.min_edge_length, max_edge_length=args.max_edge_length,
-                   nurbs=args.nurbs or None, threads=args.threads,
-                   face_ids=[int(f) for f in args.faces.split(",")] if args.faces else None)
+    options = _mesh_options(args)
     start = time.monotonic()
     bar = None
     progress = None
@@ -218,6 +240,60 @@ def _report(args, result, output, start):
     return summary
 
 
+def cmd_batch(args):
+    """Exit codes: 0 every file ok, 1 any not ok, 2 bad usage or no server, 4 interrupted, 5
+    the manifest cannot be written (as the C++ batch)."""
+    import signal
+    from rdmesh import batch
+    display = batch.Display(args.quiet)
+    try:
+        client = _client(args)
+    except (OSError, ValueError) as error:
+        print("rdmesh-py: %s" % error, file=sys.stderr)
+        return batch.EXIT_USAGE
+    with client:
+        timeout = args.file_timeout if args.file_timeout is not None else args.timeout
+        try:  # the inputs and options are checked before the server is asked anything
+            run = batch.Batch(client, args.inputs, args.output, format=args.format,
+                              jobs=args.jobs or 1, timeout=timeout, progress=display.progress,
+                              problem=display.problem, **_mesh_options(args))
+        except (batch.BatchError, ValueError, TypeError) as error:
+            print("rdmesh-py: error: %s" % error, file=sys.stderr)
+            return batch.EXIT_USAGE
+        try:
+            client.health(timeout=10.0)
+            if not args.jobs:  # two calls per job slot: one uploads or waits while one meshes
+                run.jobs = max(2, 2 * client.server_status(timeout=10.0).max_jobs)
+        except RdmeshError as error:
+            print("rdmesh-py: cannot reach rdmeshd at %s: %s" % (args.address, error),
+                  file=sys.stderr)
+            return batch.EXIT_USAGE
+
+        def interrupt(signum, frame):
+            if signum == signal.SIGINT and not run.stopping:
+                run.stop()
+                display.problem("interrupted: finishing the running file(s); Ctrl-C again "
+                                "stops them now")
+            else:
+                run.kill()
+        previous = {sig: signal.signal(sig, interrupt)
+                    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+        try:
+            summary = run.run()
+        except batch.BatchError as error:
+            print("rdmesh-py: error: %s" % error, file=sys.stderr)
+            return batch.EXIT_USAGE
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+            display.erase()
+    if not args.quiet:
+        print(batch.summary_text(summary), file=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        print(json.dumps(summary.as_json()))
+    return summary.exit_code
+
+
 def cmd_view(args):
     from rdmesh.view import render
     try:
@@ -264,22 +340,38 @@ def parser():
                       help="output file: " + ", ".join(OUTPUT_FORMATS))
     mesh.add_argument("--server-path", action="store_true",
                       help="MODEL is a path under the server's --data-root")
-    mesh.add_argument("--max-deviation", type=float, help="absolute max deviation, model units")
-    mesh.add_argument("--max-deviation-rel", type=float,
-                      help="max deviation as a fraction of the bbox diagonal (default 1e-3)")
-    mesh.add_argument("--rd-tolerance", type=float, help="representation-deficit tolerance")
-    mesh.add_argument("--max-triangles", type=int, help="triangle budget for the whole model")
-    mesh.add_argument("--min-edge-length", type=float, help="model units")
-    mesh.add_argument("--max-edge-length", type=float, help="model units")
-    mesh.add_argument("--nurbs", action="store_true", help="convert faces to B-splines first")
-    mesh.add_argument("--threads", type=int, help="worker threads (capped by the server)")
-    mesh.add_argument("--faces", help="comma-separated face ids to mesh (default all)")
+    _add_mesh_options(mesh)
     mesh.add_argument("--lod",
                       help="levels of detail: relative deviations, e.g. 1e-2,1e-3,1e-4; one "
                            "call, the model read once, each level written to OUT.lodN.EXT "
                            "(N = 0 the coarsest)")
     mesh.add_argument("--no-progress", action="store_true", help="no progress bar")
     mesh.add_argument("--json", action="store_true", help="print the summary as one JSON line")
+
+    from rdmesh.batch import FORMATS
+    batch = sub.add_parser(
+        "batch", help="mesh many models through the server into a mirrored tree with "
+                      "OUTDIR/manifest.jsonl; a second run skips what is done (docs/BATCH.md)")
+    batch.add_argument("inputs", nargs="+",
+                       help="model files, folders (searched for .step .stp .iges .igs .brep) "
+                            "and @LIST files (one path per line)")
+    batch.add_argument("-o", "--output", required=True, help="output folder")
+    batch.add_argument("--format", default="msh",
+                       help="output format: %s (default %%(default)s; glb is not written by "
+                            "this client)" % ", ".join(FORMATS))
+    batch.add_argument("-j", "--jobs", type=int, default=0, metavar="N",
+                       help="calls in flight at a time, one thread each (default: 2x the "
+                            "server's job slots, as GetServerStatus reports them; behind nginx "
+                            "give 2x the replicas' slots)")
+    batch.add_argument("--timeout", dest="file_timeout", type=float, default=None,
+                       metavar="S",
+                       help="seconds per file, upload and mesh together (DEADLINE_EXCEEDED: "
+                            "timed_out); 0 = none")
+    _add_mesh_options(batch)
+    batch.add_argument("--json", action="store_true",
+                       help="print the summary as one JSON object, the last stdout line")
+    batch.add_argument("-q", "--quiet", action="store_true",
+                       help="print nothing but errors (and --json)")
 
     view = sub.add_parser("view", help="draw a mesh coloured by estimated deviation (PNG)")
     view.add_argument("mesh", help=".vtu or .ply written by rdmesh or rdmesh-py mesh (with the "
@@ -299,7 +391,7 @@ def parser():
 def main(argv=None):
     args = parser().parse_args(argv)
     commands = {"health": cmd_health, "status": cmd_status, "info": cmd_info, "mesh": cmd_mesh,
-                "view": cmd_view}
+                "batch": cmd_batch, "view": cmd_view}
     try:
         return commands[args.command](args)
     except RdmeshError as error:

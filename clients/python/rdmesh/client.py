@@ -347,6 +347,22 @@ class Client:
                 self._mesh_call(m, uv, normals, timeout, options, edges, triangle_deviation),
                 progress, edges), timeout)
 
+    def batch(self, inputs, output_dir, format="msh", jobs=4, timeout=None, progress=None,
+              problem=None, **options):
+        """Meshes a dataset through the server, as `rdmesh-py batch` (docs/BATCH.md, "Through
+        the service"): `inputs` are files, folders (searched for .step .stp .iges .igs .brep)
+        and "@list.txt" files; the meshes mirror them under `output_dir` in `format` (msh, stl,
+        obj, ply or vtu), and output_dir/manifest.jsonl records every file (the C++ `rdmesh
+        batch`'s fields and statuses). `jobs` calls are in flight at a time (one thread each),
+        each file is uploaded at most once, `timeout` is per file (seconds, upload and mesh
+        together). A second run skips the files already ok with the same bytes, options and
+        output. `progress` gets a batch.BatchProgress now and then, `problem` a line per file
+        that was not ok; options are mesh()'s. Returns a batch.BatchSummary (exit_code: 0 when
+        every file is ok, 1 otherwise); raises batch.BatchError for bad usage."""
+        from rdmesh.batch import Batch
+        return Batch(self, inputs, output_dir, format=format, jobs=jobs, timeout=timeout,
+                     progress=progress, problem=problem, **options).run()
+
     # -- helpers ---------------------------------------------------------------------------
 
     def _collect(self, call, progress, edges=False):
