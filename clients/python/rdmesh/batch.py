@@ -693,6 +693,9 @@ class Batch:
             if _transient(code, details) and attempt < len(_RETRY_WAITS):
                 wait = _RETRY_WAITS[attempt]
                 attempt += 1
+                # A replica that went away takes the model with it: the next one on nginx's
+                # ring answers NOT_FOUND and gets the file once more (docs/ROUTING.md).
+                uploaded = False
                 remaining = self._remaining(start)
                 if remaining is None or remaining > wait:
                     time.sleep(wait)
