@@ -447,6 +447,7 @@ class Batch:
     # -- the run --
 
     def run(self) -> BatchSummary:
+        self._check_options()
         self._prepare()
         try:
             return self._run()
@@ -454,6 +455,26 @@ class Batch:
             self.manifest.close()
             if self._lock_fd >= 0:
                 os.close(self._lock_fd)
+
+    def _check_options(self):
+        """The mesh options, checked once by the server before anything runs (as the C++ batch
+        checks them, exit 2): it checks a Mesh request's options before it looks for the model,
+        so a request for a model no server holds answers NOT_FOUND when they are good."""
+        from rdmesh.client import RdmeshError, _Model
+        nobody = "0" * 64
+        try:
+            call = self.client._mesh_call(_Model(pb.ModelRef(model_id=nobody), nobody), False,
+                                          False, 30.0, self.options)
+            for _ in call:
+                pass
+        except (RdmeshError, grpc.RpcError) as error:
+            code = error.code if isinstance(error, RdmeshError) else error.code()
+            details = error.details if isinstance(error, RdmeshError) else error.details()
+            if code == grpc.StatusCode.INVALID_ARGUMENT:
+                raise BatchError("the server refuses the mesh options: %s" % details) from None
+            if code != grpc.StatusCode.NOT_FOUND:
+                raise BatchError("cannot check the mesh options with the server: %s: %s"
+                                 % (code.name if code else "UNKNOWN", details)) from None
 
     def _prepare(self):
         try:
