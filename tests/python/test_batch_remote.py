@@ -13,7 +13,7 @@ import time
 
 import grpc
 
-from conftest import CUBE, CYLINDER, DATA, EIGHT_CYL, NIST, RDMESH_PY, Daemon
+from conftest import CUBE, CYLINDER, DATA, EIGHT_CYL, NIST, RDMESH_PY, Daemon, wait_until
 from test_isolation import _oriented_edge_chain
 
 from rdmesh import batch as rbatch
@@ -241,8 +241,9 @@ def test_ctrl_c_finishes_running_files_then_kill(daemon, tmp_path):
     out = tmp_path / "out"
     cmd = ["/usr/bin/python3", str(RDMESH_PY), "--address", daemon.address, "batch", str(models),
            "-o", str(out), "--jobs", "1", "--timeout", "3", "--json"]
+    status = daemon.client()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.5)  # the interpreter starts, then the slow file runs
+    assert wait_until(lambda: status.server_status().active_jobs == 1, 30) is not None
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=30)
     assert proc.returncode == 4, stderr
@@ -252,8 +253,9 @@ def test_ctrl_c_finishes_running_files_then_kill(daemon, tmp_path):
     summary = json.loads(stdout.strip().splitlines()[-1])
     assert summary["interrupted"] and summary["not_done"] == 4
 
+    assert wait_until(lambda: status.server_status().active_jobs == 0, 10) is not None
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.5)
+    assert wait_until(lambda: status.server_status().active_jobs == 1, 30) is not None
     start = time.monotonic()
     proc.send_signal(signal.SIGINT)
     time.sleep(0.2)
