@@ -254,6 +254,8 @@ def test_ctrl_c_finishes_running_files_then_kill(daemon, tmp_path):
     assert summary["interrupted"] and summary["not_done"] == 4
 
     assert wait_until(lambda: status.server_status().active_jobs == 0, 10) is not None
+    older = out / "a_slow.msh"  # as an earlier run with other options would have left it
+    older.write_text("an older mesh")
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert wait_until(lambda: status.server_status().active_jobs == 1, 30) is not None
     start = time.monotonic()
@@ -265,6 +267,7 @@ def test_ctrl_c_finishes_running_files_then_kill(daemon, tmp_path):
     assert time.monotonic() - start < 5.0
     assert manifest(out)[str(models / "a_slow.step")] == entries[str(models / "a_slow.step")]
     assert not [p for p in out.rglob("*partial*")]
+    assert older.read_text() == "an older mesh"  # a stopped file is not done: nothing removed
 
 
 def test_replicas_behind_nginx(daemon, tmp_path):

@@ -635,19 +635,23 @@ class Batch:
         start = time.monotonic()
         partial = os.path.join(os.path.dirname(final),
                                "." + os.path.basename(final) + ".partial" + self.extension)
-        keep = False
+        keep = stopped = False
         try:
             result = self._mesh(index, item, data, sha256, entry, start)
             del data
             if result is not None:
                 keep = self._write(result, partial, final, entry)
+        except _Stopped:
+            stopped = True
+            raise
         finally:
-            if not keep:
-                for path in (partial, final):
-                    try:
-                        os.remove(path)
-                    except OSError:
-                        pass
+            # Without a mesh, an older output of this path goes too (as the C++ batch); a
+            # stopped file is not done, and what an earlier run left stays.
+            for path in ([] if keep else [partial] if stopped else [partial, final]):
+                try:
+                    os.remove(path)
+                except OSError:
+                    pass
         entry["seconds"] = time.monotonic() - start
         if keep:
             entry["output"] = item.output
