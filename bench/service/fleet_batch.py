@@ -14,9 +14,11 @@ docs/BATCH.md's throughput table. Every run writes .msh at the default 1e-3 of t
 a fresh folder. Each replica is `rdmeshd --threads 1` (one engine thread per job, as the C++
 batch gives each child on 2 cores) with `--max-jobs 2` alone or `--max-jobs 1` as one of three
 (deploy/k8s's RDMESH_MAX_JOBS); the client keeps 2 calls per job slot in flight (--jobs 4 and
-6). CPU seconds are user + system of every process of the run (client, daemons and their
-workers, nginx; for the C++ batch, its children), from getrusage(RUSAGE_CHILDREN) once all are
-reaped, so the daemons' start-up is included (about 0.1 s each).
+6). `py1s` is the one-replica run with `--cache-dir` on (the parsed-model store deploy/k8s
+turns on): what writing every model to the store costs, and its size. CPU seconds are user +
+system of every process of the run (client, daemons and their workers, nginx; for the C++
+batch, its children), from getrusage(RUSAGE_CHILDREN) once all are reaped, so the daemons'
+start-up is included (about 0.1 s each).
 """
 
 import argparse
@@ -57,12 +59,13 @@ def children_cpu():
 class Replica:
     """rdmeshd on 127.0.0.1:<free port>, its log in `log`."""
 
-    def __init__(self, binary, log, max_jobs):
+    def __init__(self, binary, log, max_jobs, store=None):
         self.log_path = log
         self._log = open(log, "w")
+        extra = ["--cache-dir", str(store)] if store else []
         self.proc = subprocess.Popen(
-            [binary, "--listen", "127.0.0.1:0", "--threads", "1", "--max-jobs", str(max_jobs)],
-            stdout=self._log, stderr=subprocess.STDOUT)
+            [binary, "--listen", "127.0.0.1:0", "--threads", "1", "--max-jobs", str(max_jobs),
+             *extra], stdout=self._log, stderr=subprocess.STDOUT)
         end = time.monotonic() + 30
         while time.monotonic() < end:
             match = re.search(r"listening on (\S+):(\d+) ", log.read_text())
@@ -105,9 +108,11 @@ def measure(kind, args, listing, work, run_id):
             summary = json.loads(proc.stdout.strip().splitlines()[-1])
             label = "C++ `rdmesh batch --jobs 2` (local, a process per file)"
         else:
-            count = 1 if kind == "py1" else 3
+            count = 3 if kind == "py3" else 1
+            store = work / ("store-%s" % run_id) if kind == "py1s" else None
             replicas = [Replica(str(args.build / "bin" / "rdmeshd"),
-                                work / ("%s-replica%d.log" % (run_id, i)), 2 if count == 1 else 1)
+                                work / ("%s-replica%d.log" % (run_id, i)), 2 if count == 1 else 1,
+                                store)
                         for i in range(count)]
             address = replicas[0].address
             if count > 1:
@@ -121,6 +126,9 @@ def measure(kind, args, listing, work, run_id):
             client_cpu = children_cpu() - client_before
             label = ("`rdmesh-py batch --jobs 4`, 1 rdmeshd (--max-jobs 2)" if count == 1 else
                      "`rdmesh-py batch --jobs 6`, 3 rdmeshd (--max-jobs 1 each) behind nginx")
+            if store:
+                label = label.replace("--max-jobs 2", "--max-jobs 2 --cache-dir, the store "
+                                                      "deploy/k8s turns on")
         wall = time.monotonic() - start
     finally:
         if nginx is not None:
@@ -131,8 +139,14 @@ def measure(kind, args, listing, work, run_id):
     with open(out / "manifest.jsonl") as file:
         entries = {e["path"]: e for e in map(json.loads, file)}
     counts = summary["counts"]
-    row = {"run": run_id, "kind": kind, "label": label, "wall": wall,
-           "files_per_min": 60.0 * len(entries) / wall, "cpu": cpu, "client_cpu": client_cpu,
+    output_mb = sum(p.stat().st_size for p in out.rglob("*.msh")) / 1e6
+    store_mb = None
+    if kind == "py1s":
+        store_mb = sum(p.stat().st_size for p in (work / ("store-%s" % run_id)).rglob("*")
+                       if p.is_file()) / 1e6
+    row = {"output_mb": output_mb, "store_mb": store_mb, "run": run_id, "kind": kind,
+           "label": label, "wall": wall, "files_per_min": 60.0 * len(entries) / wall,
+           "cpu": cpu, "client_cpu": client_cpu,
            "ok": counts["ok"], "not_ok": sum(v for k, v in counts.items() if k != "ok"),
            "load": (load_before, os.getloadavg()[0])}
     return row, entries
@@ -149,7 +163,7 @@ def main():
                         help="each configuration this many times, in alternation")
     parser.add_argument("--kinds", default="cpp,py1,py3",
                         help="which runs, in order: cpp, py1 (one rdmeshd), py3 (three "
-                             "behind nginx)")
+                             "behind nginx), py1s (one rdmeshd with --cache-dir)")
     parser.add_argument("--out", type=pathlib.Path, help="also write the table here")
     parser.add_argument("--keep", action="store_true", help="keep the meshes and logs")
     args = parser.parse_args()
@@ -187,9 +201,9 @@ def main():
                                                     os.cpu_count()),
              "",
              "| run | what | wall s | files/min | CPU s (all processes) | CPU s per file "
-             "| of which the Python client | ok / not ok | same triangles as C++ | load average "
-             "before → after |",
-             "|---|---|---:|---:|---:|---:|---:|---|---:|---|"]
+             "| of which the Python client | ok / not ok | same triangles as C++ | .msh MB "
+             "| load average before → after |",
+             "|---|---|---:|---:|---:|---:|---:|---|---:|---:|---|"]
     for row in rows:
         same = "-"
         if reference is not None and not row["kind"].startswith("cpp"):
@@ -198,11 +212,17 @@ def main():
                                      if p in reference
                                      and e["triangles"] == reference[p]["triangles"]),
                                  len(entries))
-        lines.append("| %s | %s | %.1f | %.1f | %.1f | %.3f | %s | %d / %d | %s | %.2f → %.2f |"
+        lines.append("| %s | %s | %.1f | %.1f | %.1f | %.3f | %s | %d / %d | %s | %.1f "
+                     "| %.2f → %.2f |"
                      % (row["run"], row["label"], row["wall"], row["files_per_min"], row["cpu"],
                         row["cpu"] / len(files),
                         "%.1f" % row["client_cpu"] if row["client_cpu"] is not None else "-",
-                        row["ok"], row["not_ok"], same, *row["load"]))
+                        row["ok"], row["not_ok"], same, row["output_mb"], *row["load"]))
+    for row in rows:
+        if row["store_mb"] is not None:
+            lines.append("")
+            lines.append("%s: the store held %.1f MB after the run (%.0f KB a file)."
+                         % (row["run"], row["store_mb"], 1e3 * row["store_mb"] / len(files)))
     table = "\n".join(lines) + "\n"
     print(table)
     if args.out:
