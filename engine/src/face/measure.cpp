@@ -537,6 +537,29 @@ double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3], int edges, 
   return best;
 }
 
+double SurfaceSideDeviation(Surface& s, const Vec2 uv[3], Vec2 extra, const Vec3* near, int count,
+                            Vec2* where) {
+  constexpr int kN = 4;
+  double best = 0;
+  auto sample = [&](Vec2 q) {
+    const Vec3 x = s.Point(q.x, q.y);
+    double d = HUGE_VAL;
+    for (int k = 0; k < count && d > best; ++k)
+      d = std::min(d, PointTriangleDistance(x, near[3 * k], near[3 * k + 1], near[3 * k + 2]));
+    if (d > best) best = d, *where = q;
+  };
+  for (int i = 0; i <= kN; ++i) {
+    for (int j = 0; i + j <= kN; ++j) {
+      if (i == kN || j == kN || i + j == 0) continue;  // the corners lie on the surface
+      const double b1 = double(i) / kN, b2 = double(j) / kN;
+      sample((1 - b1 - b2) * uv[0] + (b1 * uv[1] + b2 * uv[2]));
+    }
+  }
+  sample((1.0 / 3) * (uv[0] + uv[1] + uv[2]));
+  sample(extra);
+  return best;
+}
+
 double SplitAreaRatio(Surface& s, const Vec2 uv[3], const Vec3 p[3], Vec2 q) {
   Vec3 x = s.Point(q.x, q.y);
   double a = Area(p[0], p[1], p[2]);

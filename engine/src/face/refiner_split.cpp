@@ -95,7 +95,7 @@ Status Refiner::Verify(int64_t max_triangles) {
       checked[t] = stamp_[t] + 1u;
       if (m.violation > 1 || (criteria_.min_length > 0 && m.max_length < 2 * criteria_.min_length))
         continue;  // refinement left it (reported), or it is too small to split
-      Vec2 uv[3];
+      Vec2 uv[3], uv_scratch[3];
       Vec3 p[3];
       mesh_.MeasureCorners(t, uv, p);
       const Tri& tri = mesh_.tri[t];
@@ -104,8 +104,19 @@ Status Refiner::Verify(int64_t max_triangles) {
       int edges = 0;  // an edge grid's chord holds its own deviation, and cannot be split
       for (int i = 0; i < 3; ++i) edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
       Vec2 where;
-      const double dense = DenseDeviation(surface_, uv, p, edges, limit, &where);
-      if (!(dense > limit)) continue;
+      double dense = DenseDeviation(surface_, uv, p, edges, limit, &where);
+      if (!(dense > limit)) {
+        // The other way round: the surface over the triangle to it or a neighbour.
+        Vec3 near[12];
+        int count = 1;
+        near[0] = p[0], near[1] = p[1], near[2] = p[2];
+        for (int i = 0; i < 3; ++i) {
+          const int w = mesh_.nbr[t][i];
+          if (w >= 0 && mesh_.alive[w]) mesh_.MeasureCorners(w, uv_scratch, near + 3 * count++);
+        }
+        dense = SurfaceSideDeviation(surface_, uv, m.worst_uv, near, count, &where);
+        if (!(dense > limit)) continue;
+      }
       m.deviation = dense, m.worst_uv = where;
       m.violation = std::max(m.violation, dense / limit);
       ++over;
