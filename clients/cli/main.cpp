@@ -184,6 +184,7 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   RunInfo run;
   run.model_path = flags.model;
   run.output_path = output;
+  run.off_surface = options->off_surface;
   auto model = Load(flags, &context, &run);
   if (!model.ok()) {
     if (IsStop(model.status()))

@@ -70,6 +70,7 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
   int64_t over = 0;
   for (const FaceMesh& face : result.faces) over += OverCriteria(face);
   nlohmann::ordered_json faces = nlohmann::ordered_json::array();
+  const bool off_surface = run.off_surface;
   for (const FaceMesh& face : result.faces) {
     faces.push_back({
         {"id", face.face_id},
@@ -82,6 +83,10 @@ nlohmann::ordered_json MeshReportJson(const MeshResult& result, const RunInfo& r
         {"reason", face.reason},
         {"seconds", face.seconds},
     });
+    if (off_surface) {
+      faces.back()["offset"] = face.offset;
+      faces.back()["offset_reason"] = face.offset_reason;
+    }
   }
   nlohmann::ordered_json json = {
       {"model", run.model_path},

@@ -27,6 +27,7 @@ struct RunInfo {
   bool store_used = false;    ///< --cache-dir was given
   bool from_store = false;    ///< the model was read from the store, not parsed
   std::string store_problem;  ///< a discarded or unwritable store entry; "" when none
+  bool off_surface = false;   ///< MeshOptions::off_surface: faces report offset, offset_reason
 };
 
 /// The load's stages as one JSON object, stage -> seconds, in load order.

@@ -34,6 +34,7 @@ MeshOptions FromProto(const pb::MeshOptions& in) {
   out.timeout_seconds = in.timeout_seconds();
   if (in.has_sharp_edge_angle()) out.sharp_edge_angle = in.sharp_edge_angle();
   out.compress = in.compress();
+  out.off_surface = in.off_surface();
   out.face_ids.assign(in.face_ids().begin(), in.face_ids().end());
   return out;
 }
@@ -51,6 +52,7 @@ pb::MeshOptions ToProto(const MeshOptions& in) {
   out.set_timeout_seconds(in.timeout_seconds);
   out.set_sharp_edge_angle(in.sharp_edge_angle);
   out.set_compress(in.compress);
+  out.set_off_surface(in.off_surface);
   for (int id : in.face_ids) out.add_face_ids(id);
   return out;
 }
@@ -243,7 +245,7 @@ std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool
   // most 5. The fixed fields, the reason and the MeshEvent wrapper fit in the reserve.
   const std::size_t node_bytes = 24 + (with_uv ? 16 : 0) + (with_normals ? 24 : 0);
   const std::size_t triangle_bytes = 15 + (with_deviation ? 8 : 0);
-  const std::size_t reserve = 512 + face.reason.size();
+  const std::size_t reserve = 512 + face.reason.size() + face.offset_reason.size();
   const std::size_t budget =
       max_bytes > reserve + node_bytes ? max_bytes - reserve : node_bytes;  // always progress
 
@@ -258,6 +260,8 @@ std::vector<pb::FaceMesh> SplitFaceMesh(const FaceMesh& face, bool with_uv, bool
   header.set_area(face.area);
   header.set_exact_area(face.exact_area);
   header.set_seconds(face.seconds);
+  header.set_offset(face.offset);
+  header.set_offset_reason(face.offset_reason);
 
   std::vector<pb::FaceMesh> parts;
   int64_t node = 0;
@@ -399,6 +403,8 @@ Status MeshResultBuilder::AddFace(const pb::FaceMesh& part) {
     face.area = part.area();
     face.exact_area = part.exact_area();
     face.seconds = part.seconds();
+    face.offset = part.offset();
+    face.offset_reason = part.offset_reason();
     entry.chunk_count = part.chunk_count();
     face.xyz.reserve(3 * part.node_count());
     face.triangles.reserve(3 * part.triangle_count());

@@ -137,6 +137,9 @@ def _add_mesh_options(parser):
     parser.add_argument("--min-edge-length", type=float, help="model units")
     parser.add_argument("--max-edge-length", type=float, help="model units")
     parser.add_argument("--nurbs", action="store_true", help="convert faces to B-splines first")
+    parser.add_argument("--off-surface", action="store_true",
+                        help="let the nodes leave the surface: triangles on both sides of it "
+                             "within the deviation, about half as many on faces bending one way")
     parser.add_argument("--threads", type=int, help="worker threads (capped by the server)")
     parser.add_argument("--faces", help="comma-separated face ids to mesh (default all)")
 
@@ -150,7 +153,8 @@ def _mesh_options(args):
     return dict(max_deviation=args.max_deviation, max_deviation_rel=args.max_deviation_rel,
                 rd_tolerance=args.rd_tolerance, max_triangles=args.max_triangles,
                 min_edge_length=args.min_edge_length, max_edge_length=args.max_edge_length,
-                nurbs=args.nurbs or None, threads=args.threads, face_ids=faces)
+                nurbs=args.nurbs or None, off_surface=args.off_surface or None,
+                threads=args.threads, face_ids=faces)
 
 
 def cmd_mesh(args):

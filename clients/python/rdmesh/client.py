@@ -21,7 +21,7 @@ MODEL_HEADER = "x-rdmesh-model"
 _MODEL_ID = re.compile(r"^[0-9a-f]{64}$")
 _OPTION_NAMES = {"max_deviation", "max_deviation_rel", "rd_tolerance", "max_triangles",
                  "min_edge_length", "max_edge_length", "nurbs", "threads", "face_ids",
-                 "timeout_seconds", "sharp_edge_angle", "compress"}
+                 "timeout_seconds", "sharp_edge_angle", "compress", "off_surface"}
 _STAGES = {pb.STAGE_LOADING: "loading", pb.STAGE_EDGES: "edges", pb.STAGE_FACES: "faces",
            pb.STAGE_ASSEMBLY: "assembly", pb.STAGE_DONE: "done"}
 _FACE_STATUS = {pb.FACE_STATUS_OK: "ok", pb.FACE_STATUS_FAILED: "failed",
@@ -69,6 +69,10 @@ class FaceResult:
     exact_area: float = 0.0
     seconds: float = 0.0
     messages: int = 1  # FaceMesh events it came in
+    # off_surface: how far the interior nodes lie off the surface along its outward normal,
+    # model units (0 on it), and why a face stayed on its surface
+    offset: float = 0.0
+    offset_reason: str = ""
 
 
 @dataclass
@@ -197,7 +201,8 @@ class _FaceParts:
             normals=normals if len(normals) else None,
             triangle_deviation=deviation if len(triangles) and len(deviation) == len(triangles)
             else None, max_deviation=f.max_deviation,
-            area=f.area, exact_area=f.exact_area, seconds=f.seconds, messages=self.count)
+            area=f.area, exact_area=f.exact_area, seconds=f.seconds, messages=self.count,
+            offset=f.offset, offset_reason=f.offset_reason)
 
 
 @dataclass
@@ -337,7 +342,9 @@ class Client:
         max_edge_length, nurbs, threads, face_ids, timeout_seconds, sharp_edge_angle, compress
         (the mesh is for a compressed .glb: meshed to 98.5% of the deviation, leaving the rest to
         the writer's rounding of positions, as `rdmesh mesh --compress` asks; the summary's
-        requested deviation stays the whole one). `progress` is called with a Progress as the run advances. `timeout` is the call's
+        requested deviation stays the whole one), off_surface (nodes off the surface, triangles
+        on both sides of it within the deviation, as `rdmesh mesh --off-surface`: FaceResult
+        offset and offset_reason say how far and why not). `progress` is called with a Progress as the run advances. `timeout` is the call's
         deadline in seconds. With `edges`, MeshResult.edges holds every B-rep edge as a
         polyline over the assembled mesh's nodes (Edges). With `triangle_deviation`, every
         FaceResult and the MeshResult carry each triangle's estimated deviation."""

@@ -53,6 +53,12 @@ struct FaceMesh {
   double area = 0.0;           ///< area of the triangles, model units^2
   double exact_area = 0.0;     ///< area of the B-rep face, model units^2
   double seconds = 0.0;        ///< wall time spent on this face
+  /// MeshOptions::off_surface: how far the face's interior nodes lie off its surface, along the
+  /// face's outward normal (negative: inward), model units; 0 on the surface.
+  double offset = 0.0;
+  /// MeshOptions::off_surface: why a face stayed on its surface (a plane, a saddle, or the
+  /// offset mesh missed the deviation); empty otherwise.
+  std::string offset_reason;
 
   int64_t triangle_count() const { return static_cast<int64_t>(triangles.size() / 3); }
   int64_t node_count() const { return static_cast<int64_t>(xyz.size() / 3); }

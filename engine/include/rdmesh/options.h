@@ -56,7 +56,18 @@ struct MeshOptions {
   /// positions; MeshSummary::requested_deviation still reports the whole deviation. Needs a
   /// deviation (max_deviation or max_deviation_rel) and no max_triangles budget.
   bool compress = false;
+  /// Mesh off the surface: on a face that bends one way (sphere, cylinder, cone, a convex or
+  /// concave B-spline...), the interior nodes move off the surface by up to
+  /// kOffSurfaceShare of the deviation, toward its outer side, so that the triangles lie on
+  /// both sides of it within the deviation, with about half as many as on the surface.
+  /// FaceMesh::offset says how far each face's nodes moved (0: kept on the surface, and
+  /// FaceMesh::offset_reason why). Normals stay the surface's at each node's foot.
+  bool off_surface = false;
 };
+
+/// With MeshOptions::off_surface: the share of the deviation the interior nodes lie off the
+/// surface by, the rest kept as a margin for what the refinement's estimate misses.
+inline constexpr double kOffSurfaceShare = 0.95;
 
 /// The relative deviation a run uses: max_deviation_rel, or its default when unset.
 inline double MaxDeviationRel(const MeshOptions& options) {

@@ -295,6 +295,8 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
   for (int e = 1; e <= ne; ++e)
     for (int f : model.edge_faces[e - 1])
       if (!developable[f - 1]) factor[e - 1] = gc.curved_face_factor;
+  if (!gc.edge_scale.empty())
+    for (int e = 1; e <= ne; ++e) factor[e - 1] *= gc.edge_scale[e - 1];
   for (int e = 1; e <= ne; ++e)
     factor[source[e - 1] - 1] = std::min(factor[source[e - 1] - 1], factor[e - 1]);
 

@@ -37,6 +37,9 @@ struct GridCriteria {
   /// stays below this fraction of that width. A chord then takes or adds at most about 2/3 of
   /// this fraction of its share of the face's area. 0 = off.
   double narrow_face_fraction = 0.5;
+  /// Per edge id - 1, a factor on max_deviation for that edge alone (the circles an off-surface
+  /// run moves off their curve: run/off_surface.h); empty = 1 for every edge.
+  std::vector<double> edge_scale;
 };
 
 /// Grids indexed by edge id - 1. `edge_needed[e-1]` false skips an edge (face subsets).

@@ -35,6 +35,10 @@ Status ValidateOptions(const MeshOptions& o) {
     return InvalidArgument("timeout_seconds must be >= 0");
   if (!Finite(o.sharp_edge_angle) || o.sharp_edge_angle < 0 || o.sharp_edge_angle > 180)
     return InvalidArgument("sharp_edge_angle must lie in [0, 180] degrees");
+  if (o.off_surface && o.max_triangles == 0 && o.max_deviation == 0 && rel == 0)
+    return InvalidArgument(
+        "off_surface needs a max deviation (absolute or relative) or a triangle budget: the "
+        "nodes leave the surface by a share of the deviation");
   if (o.compress && (o.max_triangles > 0 || (o.max_deviation == 0 && rel == 0)))
     return InvalidArgument(
         "compress needs a max deviation (absolute or relative) and no triangle budget: its "

@@ -5,11 +5,14 @@
 #include <Geom_Surface.hxx>
 #include <Precision.hxx>
 #include <Standard_Failure.hxx>
+#include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Vertex.hxx>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <string>
 
 #include "boundary/face_domain.h"
@@ -20,9 +23,11 @@
 #include "face/refine_constants.h"
 #include "face/unfold.h"
 #include "face/work_mesh.h"
+#include "geometry/offset_surface.h"
 #include "geometry/surface.h"
 #include "geometry/surface_type.h"
 #include "model/model.h"
+#include "rdmesh/options.h"
 
 namespace rdmesh {
 
@@ -194,7 +199,8 @@ class FaceRun {
         job_(job),
         context_(context),
         f_(*f),
-        face_(model.face(face_id)) {}
+        face_(model.face(face_id)),
+        criteria_(job.criteria) {}
 
   // The evaluator and the face's boundary loops in (u,v), which must not cross.
   bool BuildDomain() {
@@ -202,6 +208,13 @@ class FaceRun {
     surface_ = WithPointCache(FaceSurface(model_, pcurves_, face_id_, job_.nurbs, job_.surfaces));
     Status st = BuildFaceDomain(model_, pcurves_, face_id_, grids_, *surface_, &domain_);
     if (!st.ok()) return Fail(st.message());
+    if (job_.moved_vertices && !job_.moved_vertices->empty()) {
+      for (size_t i = 0; i < domain_.ref.size(); ++i) {
+        if (domain_.ref[i].dim != 0) continue;
+        auto it = job_.moved_vertices->find(domain_.ref[i].entity);
+        if (it != job_.moved_vertices->end()) domain_.xyz[i] = it->second;
+      }
+    }
     if (Stopping()) return Stop();
     std::vector<DomainConflict> conflicts = FindConflicts(domain_, context_);
     if (Stopping()) return Stop();
@@ -212,9 +225,9 @@ class FaceRun {
   // A sphere meshed to a deviation alone starts from a lattice at about its final density,
   // settled before refinement; other faces from a coarse grid of seeds.
   void PlaceSeeds() {
-    if (f_.surface_type == SurfaceType::kSphere && !job_.nurbs && job_.criteria.rd_tolerance == 0 &&
-        job_.criteria.max_length == 0) {
-      seeds_ = SphereLatticeSeeds(domain_, *surface_, job_.criteria.max_deviation,
+    if (f_.surface_type == SurfaceType::kSphere && !job_.nurbs && criteria_.rd_tolerance == 0 &&
+        criteria_.max_length == 0) {
+      seeds_ = SphereLatticeSeeds(domain_, *surface_, criteria_.max_deviation,
                                   static_cast<size_t>(job_.max_triangles / 2));
     }
     settle_rounds_ = seeds_.empty() ? 0 : kLatticeSettleRounds;
@@ -238,7 +251,7 @@ class FaceRun {
     WorkMesh folded = mesh_;
     const bool unfolded =
         UnfoldInitialMesh(&mesh_, *surface_, domain_.scale_u, domain_.scale_v) > 0;
-    status_ = RefineFace(&mesh_, *surface_, job_.criteria, domain_.scale_u, domain_.scale_v,
+    status_ = RefineFace(&mesh_, *surface_, criteria_, domain_.scale_u, domain_.scale_v,
                          job_.max_triangles, job_.improve, context_, &stats_, settle_rounds_);
     if (unfolded && Stuck()) {
       const int64_t cap = kFoldedStartCap * std::max(stats_.refined_triangles, kFoldedStartMin);
@@ -253,7 +266,7 @@ class FaceRun {
       WorkMesh start;
       const size_t max_seeds =
           std::max<size_t>(kTurnStartMinSeeds, kTurnStartSeedFactor * domain_.uv.size());
-      status_ = TurnLimitedTriangulation(domain_, seeds_, *surface_, job_.criteria.min_normal_cos,
+      status_ = TurnLimitedTriangulation(domain_, seeds_, *surface_, criteria_.min_normal_cos,
                                          kTurnStartMaxTurn, kTurnStartRounds, max_seeds, context_,
                                          &start);
       if (status_.ok()) {
@@ -278,6 +291,131 @@ class FaceRun {
     return true;
   }
 
+  // --off-surface: a face that bends one way is meshed as its offset toward its outer side by
+  // kOffSurfaceShare of the deviation, to twice that: an interpolating mesh of the offset then
+  // lies on both sides of the surface, within the deviation, with about half the triangles. The
+  // first triangulation's triangles and nodes sample the bend. On a plane or a saddle the face
+  // stays on its surface and says why (true); false when the offset's triangulation fails.
+  bool LeaveSurface() {
+    const double deviation = job_.criteria.max_deviation;
+    if (!(deviation > 0) || surface_->planar) return KeepOn("a plane does not bend");
+    const int side = job_.bend_sides ? (*job_.bend_sides)[face_id_ - 1] : SampledBendSide();
+    if (side == 0) return KeepOn("it bends both ways (a saddle) or not at all");
+    offset_ = side * kOffSurfaceShare * deviation;
+    base_ = std::move(surface_);
+    surface_ = WithPointCache(MakeOffsetSurface(base_.get(), offset_));
+    criteria_.max_deviation = 2 * kOffSurfaceShare * deviation;
+    seeds_.clear();
+    PlaceSeeds();
+    if (!Triangulate()) return false;
+    MoveOwnBoundary();
+    return true;
+  }
+
+  // BendSide over the first triangulation's triangles and nodes (without a run's plan).
+  int SampledBendSide() {
+    std::vector<Vec2> samples;
+    Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};
+    for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
+      if (!mesh_.alive[t]) continue;
+      Vec2 sum;
+      for (int v : mesh_.tri[t]) {
+        sum = sum + mesh_.uv[v];
+        lo = {std::min(lo.x, mesh_.uv[v].x), std::min(lo.y, mesh_.uv[v].y)};
+        hi = {std::max(hi.x, mesh_.uv[v].x), std::max(hi.y, mesh_.uv[v].y)};
+      }
+      samples.push_back((1.0 / 3) * sum);
+    }
+    for (int v = 0; v < mesh_.node_count(); ++v)
+      if (!mesh_.fixed[v]) samples.push_back(mesh_.uv[v]);
+    if (samples.empty()) return 0;
+    return BendSide(*surface_, samples, kBendStep * (hi.x - lo.x), kBendStep * (hi.y - lo.y),
+                    kBendTolerance);
+  }
+
+  // Boundary nodes that no other face shares move off the surface with the interior: those of
+  // a seam, a degenerate edge or an open shell's free edge (edges of this face alone), and the
+  // vertices only such edges meet at. On the sphere (a seam from pole to pole) a strip along the
+  // seam would otherwise be meshed to the whole deviation. The nodes of one vertex, or of one
+  // degenerate edge (a pole), stay one point.
+  void MoveOwnBoundary() {
+    auto own = [&](int e) {
+      const std::vector<int>& faces = model_.edge_faces[e - 1];
+      return faces.size() == 1 && faces[0] == face_id_;
+    };
+    std::map<int, bool> own_vertex;
+    for (int e : model_.face_edges[face_id_ - 1]) {
+      TopoDS_Vertex ends[2];
+      TopExp::Vertices(model_.edge(e), ends[0], ends[1]);
+      for (const TopoDS_Vertex& v : ends) {
+        const int id = v.IsNull() ? 0 : model_.vertices.FindIndex(v);
+        if (id == 0) continue;
+        auto it = own_vertex.emplace(id, true).first;
+        it->second = it->second && own(e);
+      }
+    }
+    std::map<std::pair<int, int>, Vec3> point;  // (dim, id) of a vertex or a degenerate edge
+    for (int v = 0; v < mesh_.node_count(); ++v) {
+      const NodeRef& r = mesh_.ref[v];
+      if (!mesh_.fixed[v] || r.dim > 1) continue;
+      if (r.dim == 0 ? !own_vertex[r.entity] : !own(r.entity)) continue;
+      const Vec3 moved = surface_->Point(mesh_.uv[v].x, mesh_.uv[v].y);
+      if (r.dim == 0 || BRep_Tool::Degenerated(model_.edge(r.entity)))
+        mesh_.xyz[v] = point.emplace(std::make_pair(r.dim, r.entity), moved).first->second;
+      else
+        mesh_.xyz[v] = moved;
+    }
+  }
+
+  // The offset's mesh measured against the face's own surface both ways (from points of the
+  // triangles, DenseDeviation, and from points of the surface, SurfaceSideDeviation): the
+  // refinement's measures were of the offset. Within the deviation, the measures replace the
+  // refinement's (true); else false, and the face goes back on its surface.
+  bool OffSurfaceHolds() {
+    if (!base_) return true;
+    const double limit = job_.criteria.max_deviation;
+    std::vector<double> deviation(mesh_.tri.size(), 0.0);
+    double worst = 0;
+    for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
+      if (!mesh_.alive[t]) continue;
+      const Tri& tri = mesh_.tri[t];
+      if (mesh_.pole_axis[tri[0]] + mesh_.pole_axis[tri[1]] + mesh_.pole_axis[tri[2]] > -3)
+        continue;  // a pole triangle stands for no patch of its own
+      Vec2 uv[3], scratch[3], where;
+      Vec3 near[12];
+      mesh_.MeasureCorners(t, uv, near);
+      int edges = 0, count = 1;
+      for (int i = 0; i < 3; ++i) {
+        edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
+        const int w = mesh_.nbr[t][i];
+        if (w >= 0 && mesh_.alive[w]) mesh_.MeasureCorners(w, scratch, near + 3 * count++);
+      }
+      double d = DenseDeviation(*base_, uv, near, edges, limit, &where);
+      d = std::max(d, SurfaceSideDeviation(*base_, uv, where, near, count, &where));
+      deviation[t] = d, worst = std::max(worst, d);
+      if (worst > limit) {
+        char text[160];
+        std::snprintf(text, sizeof(text),
+                      "off the surface it measured %.3g against the requested %.3g", worst, limit);
+        KeepOn(text);
+        return false;
+      }
+    }
+    stats_.deviation = std::move(deviation), stats_.max_deviation = worst;
+    return true;
+  }
+
+  // Meshes the face again on its own surface, after OffSurfaceHolds.
+  bool BackOnSurface() {
+    surface_ = std::move(base_);
+    criteria_ = job_.criteria;
+    offset_ = 0;
+    seeds_.clear();
+    stats_ = RefineStats();
+    PlaceSeeds();
+    return Triangulate() && Refine();
+  }
+
   // The face's triangles, oriented as the face, with exact normals (at poles too) and the
   // working mesh's node references.
   bool Extract(std::vector<NodeRef>* refs) {
@@ -286,6 +424,7 @@ class FaceRun {
     if (Stopping()) return Stop();
     if (!job_.nurbs) ExactPoleNormals(face_, *refs, &f_);
     f_.max_deviation = stats_.max_deviation;
+    f_.offset = face_.Orientation() == TopAbs_REVERSED ? -offset_ : offset_;
     f_.status = FaceStatus::kOk;
     return true;
   }
@@ -297,12 +436,13 @@ class FaceRun {
   // edge_grids.cpp); else the triangle cap, or triangles no split could bring within criteria.
   void ExplainShortfall() {
     const double deviation = job_.criteria.max_deviation;
-    double gap = deviation > 0 ? BoundaryGap(domain_, *surface_) : 0;
+    Surface& surface = base_ ? *base_ : *surface_;
+    double gap = deviation > 0 ? BoundaryGap(domain_, surface) : 0;
     if (deviation > 0 && !job_.nurbs) gap = std::max(gap, BoundaryGapPastSurface(face_, domain_));
     const double tolerance = deviation > 0 ? EdgeTolerance(face_) : 0;
     const bool missed = stats_.max_violation > 1.0 + 1e-9;
     const bool coarse =
-        tolerance > deviation && (missed || BoundaryChordHeight(domain_, *surface_) > deviation);
+        tolerance > deviation && (missed || BoundaryChordHeight(domain_, surface) > deviation);
     if (gap > deviation) f_.max_deviation = std::max(f_.max_deviation, gap);
     if (stats_.budget_hit)
       f_.reason = "stopped at the per-face triangle cap";
@@ -318,6 +458,10 @@ class FaceRun {
     f_ = Stopped(std::move(f_), *context_);
     return false;
   }
+  bool KeepOn(const std::string& why) {
+    f_.offset_reason = "kept on the surface: " + why;
+    return true;
+  }
   bool Fail(const std::string& reason) {
     f_ = Failed(std::move(f_), reason);
     return false;
@@ -330,7 +474,7 @@ class FaceRun {
   // or with `ties` keeps it as bad (and, under a cap of its own, when it did not reach it).
   bool KeepIfBetter(WorkMesh* candidate, int settle, int64_t cap, bool ties) {
     RefineStats again;
-    status_ = RefineFace(candidate, *surface_, job_.criteria, domain_.scale_u, domain_.scale_v, cap,
+    status_ = RefineFace(candidate, *surface_, criteria_, domain_.scale_u, domain_.scale_v, cap,
                          job_.improve, context_, &again, settle);
     if (!status_.ok()) return false;
     if (ties ? !(again.max_violation <= stats_.max_violation)
@@ -349,7 +493,10 @@ class FaceRun {
   Context* context_;
   FaceMesh& f_;
   const TopoDS_Face& face_;
+  FaceCriteria criteria_;  // the job's, or its offset's (LeaveSurface)
   std::unique_ptr<Surface> surface_;
+  std::unique_ptr<Surface> base_;  // the face's own surface while surface_ is its offset
+  double offset_ = 0;              // along the surface's Normal(): S + offset_ n is meshed
   FaceDomain domain_;
   std::vector<Vec2> seeds_;
   int settle_rounds_ = 0;
@@ -372,7 +519,11 @@ FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
     FaceRun run(model, pcurves, face_id, grids, job, context, &f);
     if (!run.BuildDomain()) return f;
     run.PlaceSeeds();
-    if (!run.Triangulate() || !run.Refine() || !run.Extract(refs)) return f;
+    if (!run.Triangulate()) return f;
+    if (job.off_surface && !run.LeaveSurface()) return f;
+    if (!run.Refine()) return f;
+    if (job.off_surface && !run.OffSurfaceHolds() && !run.BackOnSurface()) return f;
+    if (!run.Extract(refs)) return f;
     run.ExplainShortfall();
   } catch (const Standard_Failure& e) {
     return Failed(f, std::string("OCCT: ") + (e.GetMessageString() && *e.GetMessageString()

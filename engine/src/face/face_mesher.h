@@ -2,6 +2,8 @@
 // One face, start to end: evaluator, (u,v) domain, constrained triangulation, refinement, and
 // the FaceMesh it hands to assembly. Faces are independent once the edge grids exist.
 
+#include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,7 +43,12 @@ struct FaceJob {
   FaceCriteria criteria;
   int64_t max_triangles = 0;  ///< per-face safety cap
   bool nurbs = false;
-  bool improve = true;  ///< run the collapse / flip / smooth loop after refinement
+  bool improve = true;       ///< run the collapse / flip / smooth loop after refinement
+  bool off_surface = false;  ///< MeshOptions::off_surface
+  /// With off_surface: per face id - 1, which way it bends (FaceBendSides), and the vertices
+  /// moved with their circles (MoveCircleGrids), which the face's domain takes.
+  const std::vector<int8_t>* bend_sides = nullptr;
+  const std::map<int, Vec3>* moved_vertices = nullptr;
   /// Evaluators shared with other runs on the model (levels of detail); null = made per face.
   FaceSurfaces* surfaces = nullptr;
 };

@@ -64,4 +64,11 @@ constexpr int kTurnStartRounds = 12;
 constexpr size_t kTurnStartSeedFactor = 20;
 constexpr size_t kTurnStartMinSeeds = 2000;
 
+// --- Off the surface (face_mesher.cpp)
+// BendSide's difference steps, as a share of the face's (u,v) extent in each direction.
+constexpr double kBendStep = 1e-4;
+// A principal curvature of the other sign below this share of the largest counts as none (a
+// near-cylinder's noise); the check against the surface catches what that lets through.
+constexpr double kBendTolerance = 0.02;
+
 }  // namespace rdmesh

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,10 +18,18 @@
 #include "core/parallel.h"
 #include "face/face_mesher.h"
 #include "model/model.h"
+#include "run/off_surface.h"
 
 namespace rdmesh {
 
 namespace {
+
+// What an off-surface run decides before its faces (run/off_surface.h); empty otherwise.
+struct OffSurfacePlan {
+  std::vector<int8_t> bend_sides;      // per face id - 1
+  std::vector<uint8_t> circles;        // per edge id - 1: moved with their faces
+  std::map<int, Vec3> moved_vertices;  // vertex id -> its point, moved with its circle
+};
 
 using Clock = std::chrono::steady_clock;
 
@@ -90,22 +100,28 @@ Result<Selection> SelectFaces(const Model& model, const MeshOptions& options) {
 
 // 3. Edge grids: every needed edge discretised once.
 Status MakeEdgeGrids(const Model& model, const FacePcurves& pcurves, const MeshOptions& options,
-                     double deviation, const Selection& sel, Context* context,
-                     std::vector<EdgeGrid>* grids) {
+                     double deviation, const Selection& sel, const OffSurfacePlan& plan,
+                     Context* context, std::vector<EdgeGrid>* grids) {
   if (context) context->ReportProgress({Progress::Stage::kEdges, 0, model.edge_count()});
   GridCriteria gc;
   gc.max_deviation = deviation;
   gc.rd_tolerance = options.rd_tolerance / 5;  // faces carry ~5x the RD of their edges
   gc.max_length = options.max_edge_length;
   gc.min_length = options.min_edge_length;
+  if (!plan.circles.empty()) {
+    gc.edge_scale.assign(model.edge_count(), 1.0);
+    for (int e = 1; e <= model.edge_count(); ++e)
+      if (plan.circles[e - 1]) gc.edge_scale[e - 1] = 2 * kOffSurfaceShare;
+  }
   return BuildEdgeGrids(model, pcurves, gc, options.threads, sel.edge_needed, context, grids);
 }
 
 // 5. Mesh faces, in parallel; each slot is written by one task.
 Status MeshFaces(const Model& model, const FacePcurves& pcurves, const MeshOptions& options,
                  double deviation, const Selection& sel, const std::vector<EdgeGrid>& grids,
-                 FaceSurfaces* surfaces, Context* context, FaceReporter* reporter,
-                 std::vector<FaceMesh>* faces, std::vector<std::vector<NodeRef>>* refs) {
+                 const OffSurfacePlan& plan, FaceSurfaces* surfaces, Context* context,
+                 FaceReporter* reporter, std::vector<FaceMesh>* faces,
+                 std::vector<std::vector<NodeRef>>* refs) {
   FaceJob job;
   job.criteria.max_deviation = deviation;
   job.criteria.rd_tolerance = options.rd_tolerance;
@@ -113,6 +129,9 @@ Status MeshFaces(const Model& model, const FacePcurves& pcurves, const MeshOptio
   job.criteria.min_length = options.min_edge_length;
   job.max_triangles = kFaceTriangleCap;
   job.nurbs = options.nurbs;
+  job.off_surface = options.off_surface;
+  job.bend_sides = &plan.bend_sides;
+  job.moved_vertices = &plan.moved_vertices;
   job.surfaces = surfaces;
   const ParallelRunner runner(options.threads);
   runner.For(
@@ -217,12 +236,21 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   FacePcurves pcurves = FacePcurves::Build(model, faces, options.threads, context);
   if (Stopped(context)) return context->StopStatus();
 
+  // Off the surface: which way each face bends, and the circles that move with their faces.
+  OffSurfacePlan plan;
+  if (options.off_surface) {
+    plan.bend_sides = FaceBendSides(model, pcurves, sel->todo, options.nurbs, options.threads);
+    plan.circles = OffsetCircles(model, pcurves, plan.bend_sides, sel->edge_needed);
+  }
   std::vector<EdgeGrid> grids;
-  Status st = MakeEdgeGrids(model, pcurves, options, deviation, *sel, context, &grids);
+  Status st = MakeEdgeGrids(model, pcurves, options, deviation, *sel, plan, context, &grids);
   if (!st.ok()) return st;
   // 4. Heal: split grid segments until every face's boundary loops are valid in (u,v).
   st = HealEdgeGrids(model, pcurves, sel->todo, options.nurbs, options.threads, context, &grids);
   if (!st.ok()) return st;
+  if (!plan.circles.empty())
+    MoveCircleGrids(model, plan.circles, kOffSurfaceShare * deviation, &grids,
+                    &plan.moved_vertices);
   result.summary.edge_seconds = SecondsSince(t0);
 
   auto t1 = Clock::now();
@@ -230,8 +258,8 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   std::vector<std::vector<NodeRef>> refs(model.face_count());
   if (context) context->ReportProgress({Progress::Stage::kFaces, 0, total});
   FaceReporter reporter(context, total);
-  st = MeshFaces(model, pcurves, options, deviation, *sel, grids, surfaces, context, &reporter,
-                 &result.faces, &refs);
+  st = MeshFaces(model, pcurves, options, deviation, *sel, grids, plan, surfaces, context,
+                 &reporter, &result.faces, &refs);
   if (!st.ok()) return st;
   st = PlaceInstances(model, pcurves, *sel, grids, options.threads, context, &reporter,
                       &result.faces, &refs);

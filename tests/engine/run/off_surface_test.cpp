@@ -1,0 +1,159 @@
+// Meshing off the surface (MeshOptions::off_surface) on OCCT primitives: the triangles lie on
+// both sides of the surface within the deviation, watertight, with far fewer of them on faces
+// that bend one way; planes and saddles stay on the surface and say so.
+
+#include <gtest/gtest.h>
+
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
+#include <BRepPrimAPI_MakeTorus.hxx>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <utility>
+
+#include "rdmesh/engine.h"
+#include "shape_fixture.h"
+
+namespace rdmesh {
+namespace {
+
+MeshResult MeshOrDie(const Model& model, const MeshOptions& options) {
+  auto result = MeshModel(model, options);
+  EXPECT_TRUE(result.ok()) << result.status().ToString();
+  return result.ok() ? std::move(*result) : MeshResult();
+}
+
+int OpenEdges(const Mesh& mesh) {
+  std::map<std::pair<int, int>, int> uses;
+  for (size_t k = 0; k < mesh.triangles.size(); k += 3)
+    for (int i = 0; i < 3; ++i) {
+      int a = mesh.triangles[k + i], b = mesh.triangles[k + (i + 1) % 3];
+      ++uses[{std::min(a, b), std::max(a, b)}];
+    }
+  int open = 0;
+  for (const auto& [edge, n] : uses) open += n != 2;
+  return open;
+}
+
+// The signed distance (outward positive) of points of every triangle from the round surface
+// centred on the z axis at radius `radius` from `centre` (a sphere: the distance from the
+// centre; a cylinder: from the axis), over a barycentric grid: its smallest and largest.
+std::pair<double, double> RadialRange(const Mesh& mesh, bool sphere, double radius,
+                                      const std::vector<int>& faces_of) {
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (size_t k = 0; k < mesh.triangles.size(); k += 3) {
+    if (!faces_of.empty() &&
+        std::find(faces_of.begin(), faces_of.end(), mesh.triangle_face[k / 3]) == faces_of.end())
+      continue;
+    const double* p[3];
+    for (int i = 0; i < 3; ++i) p[i] = &mesh.xyz[3 * mesh.triangles[k + i]];
+    constexpr int kN = 8;
+    for (int i = 0; i <= kN; ++i)
+      for (int j = 0; i + j <= kN; ++j) {
+        const double b1 = double(i) / kN, b2 = double(j) / kN, b0 = 1 - b1 - b2;
+        double x[3];
+        for (int c = 0; c < 3; ++c) x[c] = b0 * p[0][c] + b1 * p[1][c] + b2 * p[2][c];
+        const double r = std::sqrt(x[0] * x[0] + x[1] * x[1] + (sphere ? x[2] * x[2] : 0));
+        lo = std::min(lo, r - radius), hi = std::max(hi, r - radius);
+      }
+  }
+  return {lo, hi};
+}
+
+TEST(OffSurfaceTest, UnitSphereTakesAboutHalfTheInterpolatingMinimum) {
+  auto model = LoadShape(BRepPrimAPI_MakeSphere(1.0).Shape(), "sphere");
+  ASSERT_TRUE(model);
+  MeshOptions options;
+  options.off_surface = true;
+  for (double rel : {1e-3, 1e-4}) {
+    options.max_deviation_rel = rel;
+    MeshResult r = MeshOrDie(*model, options);
+    const double delta = rel * GetModelInfo(*model).diagonal;
+    // The interpolating minimum: about 1,396 triangles at 1e-3 of the diagonal, 1/deviation.
+    const double minimum = 1396 * 1e-3 / rel;
+    std::printf("off-surface unit sphere at %g: %lld triangles, %.3fx the minimum\n", rel,
+                static_cast<long long>(r.summary.triangles), r.summary.triangles / minimum);
+    EXPECT_LE(r.summary.triangles, 0.6 * minimum);  // interpolating: 1.08x
+    EXPECT_EQ(OpenEdges(r.mesh), 0);
+    ASSERT_EQ(r.faces.size(), 1u);
+    EXPECT_NEAR(r.faces[0].offset, kOffSurfaceShare * delta, 1e-12);
+    EXPECT_EQ(r.faces[0].offset_reason, "");
+    // Both sides of the sphere, within the deviation: nodes outside, chords inside.
+    auto [lo, hi] = RadialRange(r.mesh, true, 1.0, {});
+    EXPECT_GE(lo, -delta);
+    EXPECT_LE(hi, delta);
+    EXPECT_LT(lo, -0.5 * delta);
+    EXPECT_GT(hi, 0.5 * delta);
+  }
+}
+
+TEST(OffSurfaceTest, CylinderCirclesMoveWithTheirFacesAndCapsStayPlanar) {
+  auto model = LoadShape(BRepPrimAPI_MakeCylinder(1.0, 4.0).Shape(), "cylinder");
+  ASSERT_TRUE(model);
+  MeshOptions on;
+  on.max_deviation_rel = 1e-4;
+  MeshOptions off = on;
+  off.off_surface = true;
+  MeshResult a = MeshOrDie(*model, on), b = MeshOrDie(*model, off);
+  const double delta = 1e-4 * GetModelInfo(*model).diagonal;
+  // Chords around the circumference twice as long: about 1 / sqrt(2) of the triangles.
+  EXPECT_LE(b.summary.triangles, 0.8 * a.summary.triangles);
+  EXPECT_EQ(OpenEdges(b.mesh), 0);
+  std::vector<int> lateral;
+  for (const FaceMesh& f : b.faces) {
+    EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+    if (f.surface_type == SurfaceType::kPlane) {
+      EXPECT_EQ(f.offset, 0);
+      EXPECT_NE(f.offset_reason.find("plane"), std::string::npos) << f.offset_reason;
+      // The caps' nodes moved with the circles, within the caps' planes.
+      for (size_t i = 2; i < f.xyz.size(); i += 3)
+        EXPECT_TRUE(std::fabs(f.xyz[i]) < 1e-12 || std::fabs(f.xyz[i] - 4.0) < 1e-12);
+    } else {
+      lateral.push_back(f.face_id);
+      EXPECT_NEAR(f.offset, kOffSurfaceShare * delta, 1e-12);
+    }
+  }
+  auto [lo, hi] = RadialRange(b.mesh, false, 1.0, lateral);
+  EXPECT_GE(lo, -delta);
+  EXPECT_LE(hi, delta);
+}
+
+TEST(OffSurfaceTest, TorusBendsBothWaysAndStaysOnItsSurface) {
+  auto model = LoadShape(BRepPrimAPI_MakeTorus(3.0, 1.0).Shape(), "torus");
+  ASSERT_TRUE(model);
+  MeshOptions off;
+  off.off_surface = true;
+  MeshResult a = MeshOrDie(*model, MeshOptions()), b = MeshOrDie(*model, off);
+  ASSERT_EQ(b.faces.size(), 1u);
+  EXPECT_EQ(b.faces[0].offset, 0);
+  EXPECT_NE(b.faces[0].offset_reason.find("saddle"), std::string::npos);
+  EXPECT_EQ(a.mesh.xyz, b.mesh.xyz);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+}
+
+TEST(OffSurfaceTest, SameMeshAtAnyThreadCount) {
+  auto model = LoadShape(BRepPrimAPI_MakeCylinder(1.0, 4.0).Shape(), "cylinder");
+  ASSERT_TRUE(model);
+  MeshOptions options;
+  options.off_surface = true;
+  options.threads = 1;
+  MeshResult a = MeshOrDie(*model, options);
+  options.threads = 2;
+  MeshResult b = MeshOrDie(*model, options);
+  EXPECT_EQ(a.mesh.xyz, b.mesh.xyz);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+}
+
+TEST(OffSurfaceTest, NeedsADeviationOrABudget) {
+  MeshOptions options;
+  options.off_surface = true;
+  options.max_deviation_rel = 0;
+  EXPECT_EQ(ValidateOptions(options).code(), StatusCode::kInvalidArgument);
+  options.max_triangles = 1000;
+  EXPECT_TRUE(ValidateOptions(options).ok());
+}
+
+}  // namespace
+}  // namespace rdmesh
