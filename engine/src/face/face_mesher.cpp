@@ -212,7 +212,7 @@ class FaceRun {
       for (size_t i = 0; i < domain_.ref.size(); ++i) {
         if (domain_.ref[i].dim != 0) continue;
         auto it = job_.moved_vertices->find(domain_.ref[i].entity);
-        if (it != job_.moved_vertices->end()) domain_.xyz[i] = it->second;
+        if (it != job_.moved_vertices->end()) domain_.xyz[i] = it->second, moved_boundary_ = true;
       }
     }
     if (Stopping()) return Stop();
@@ -405,6 +405,36 @@ class FaceRun {
     return true;
   }
 
+  // The face meshed on its surface too, where its boundary allows it (no circle moved off its
+  // curve with it): that mesh stays when it takes no more triangles. An edge that stays on its
+  // curve spends part of the offset's band on its chords, which can cost more than leaving the
+  // surface gains (a cylinder cut by an ellipse).
+  bool KeepFewer() {
+    if (!base_ || moved_boundary_) return true;
+    WorkMesh off_mesh = mesh_;
+    RefineStats off_stats = stats_;
+    std::unique_ptr<Surface> off_surface = std::move(surface_);
+    const double offset = offset_;
+    surface_ = std::move(base_);
+    criteria_ = job_.criteria;
+    offset_ = 0;
+    seeds_.clear();
+    stats_ = RefineStats();
+    PlaceSeeds();
+    if (!Triangulate() || !Refine()) return false;
+    const int on = mesh_.TriangleCount(), off = off_mesh.TriangleCount();
+    if (on <= off && !Stuck()) {
+      char text[160];
+      std::snprintf(text, sizeof(text), "off it took %d triangles, on it %d", off, on);
+      KeepOn(text);
+      return true;
+    }
+    base_ = std::move(surface_), surface_ = std::move(off_surface);
+    mesh_ = std::move(off_mesh), stats_ = std::move(off_stats), offset_ = offset;
+    criteria_.max_deviation = 2 * kOffSurfaceShare * job_.criteria.max_deviation;
+    return true;
+  }
+
   // Meshes the face again on its own surface, after OffSurfaceHolds.
   bool BackOnSurface() {
     surface_ = std::move(base_);
@@ -497,6 +527,7 @@ class FaceRun {
   std::unique_ptr<Surface> surface_;
   std::unique_ptr<Surface> base_;  // the face's own surface while surface_ is its offset
   double offset_ = 0;              // along the surface's Normal(): S + offset_ n is meshed
+  bool moved_boundary_ = false;    // a vertex of the domain moved with its circle
   FaceDomain domain_;
   std::vector<Vec2> seeds_;
   int settle_rounds_ = 0;
@@ -523,6 +554,7 @@ FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
     if (job.off_surface && !run.LeaveSurface()) return f;
     if (!run.Refine()) return f;
     if (job.off_surface && !run.OffSurfaceHolds() && !run.BackOnSurface()) return f;
+    if (job.off_surface && !run.KeepFewer()) return f;
     if (!run.Extract(refs)) return f;
     run.ExplainShortfall();
   } catch (const Standard_Failure& e) {
