@@ -405,7 +405,7 @@ class FaceRun {
     return true;
   }
 
-  // The face meshed on its surface too, where its boundary allows it (no circle moved off its
+  // The face meshed on its surface too, where its boundary allows it (no edge moved off its
   // curve with it): that mesh stays when it takes no more triangles. An edge that stays on its
   // curve spends part of the offset's band on its chords, which can cost more than leaving the
   // surface gains (a cylinder cut by an ellipse).
@@ -527,7 +527,7 @@ class FaceRun {
   std::unique_ptr<Surface> surface_;
   std::unique_ptr<Surface> base_;  // the face's own surface while surface_ is its offset
   double offset_ = 0;              // along the surface's Normal(): S + offset_ n is meshed
-  bool moved_boundary_ = false;    // a vertex of the domain moved with its circle
+  bool moved_boundary_ = false;    // a vertex of the domain moved with its edges
   FaceDomain domain_;
   std::vector<Vec2> seeds_;
   int settle_rounds_ = 0;

@@ -46,7 +46,7 @@ struct FaceJob {
   bool improve = true;       ///< run the collapse / flip / smooth loop after refinement
   bool off_surface = false;  ///< MeshOptions::off_surface
   /// With off_surface: per face id - 1, which way it bends (FaceBendSides), and the vertices
-  /// moved with their circles (MoveCircleGrids), which the face's domain takes.
+  /// moved with their edges (MoveEdgeGrids), which the face's domain takes.
   const std::vector<int8_t>* bend_sides = nullptr;
   const std::map<int, Vec3>* moved_vertices = nullptr;
   /// Evaluators shared with other runs on the model (levels of detail); null = made per face.

@@ -1,6 +1,7 @@
 #include "run/off_surface.h"
 
 #include <BRepAdaptor_Curve.hxx>
+#include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom2d_Curve.hxx>
 #include <Standard_Failure.hxx>
@@ -25,10 +26,6 @@ namespace {
 // BendSide's samples: the centres of a grid of this many cells a side over the face's (u,v)
 // bounds.
 constexpr int kBendGrid = 6;
-
-struct Circle {
-  Vec3 center, axis;
-};
 
 bool CircleOf(const TopoDS_Edge& edge, Circle* circle) {
   BRepAdaptor_Curve curve(edge);
@@ -71,29 +68,71 @@ std::vector<int8_t> FaceBendSides(const Model& model, const FacePcurves& pcurves
   return sides;
 }
 
-std::vector<uint8_t> OffsetCircles(const Model& model, const FacePcurves& pcurves,
+namespace {
+
+// The axis of a cylinder or cone face, as a circle's (centre: a point on it).
+bool AxisOf(const TopoDS_Face& face, Circle* axis) {
+  BRepAdaptor_Surface surface(face);
+  gp_Ax1 ax;
+  if (surface.GetType() == GeomAbs_Cylinder)
+    ax = surface.Cylinder().Axis();
+  else if (surface.GetType() == GeomAbs_Cone)
+    ax = surface.Cone().Axis();
+  else
+    return false;
+  axis->center = {ax.Location().X(), ax.Location().Y(), ax.Location().Z()};
+  axis->axis = {ax.Direction().X(), ax.Direction().Y(), ax.Direction().Z()};
+  return true;
+}
+
+bool SameAxis(const Circle& a, const Circle& b, double scale) {
+  if (Norm(Cross(a.axis, b.axis)) > 1e-9) return false;
+  const Vec3 d = b.center - a.center;
+  return Norm(d - Dot(d, a.axis) * a.axis) <= 1e-9 * scale;
+}
+
+}  // namespace
+
+std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurves,
                                    const std::vector<int8_t>& bend_sides,
                                    const std::vector<bool>& edge_needed) {
   const int ne = model.edge_count();
-  std::vector<uint8_t> candidate(ne, 0);
+  const double scale = std::max(1.0, model.info.diagonal);
+  std::vector<MovedEdge> candidate(ne);
   for (int e = 1; e <= ne; ++e) {
     if (!edge_needed.empty() && !edge_needed[e - 1]) continue;
     try {
       const TopoDS_Edge& edge = model.edge(e);
-      Circle circle;
-      if (BRep_Tool::Degenerated(edge) || !CircleOf(edge, &circle)) continue;
-      double f, l;
-      BRep_Tool::Range(edge, f, l);
-      bool ok = !model.edge_faces[e - 1].empty();
+      if (BRep_Tool::Degenerated(edge) || model.edge_faces[e - 1].empty()) continue;
+      MovedEdge m;
+      BRepAdaptor_Curve curve(edge);
+      const bool line = curve.GetType() == GeomAbs_Line;
+      if (line) {
+        // A ruling of cylinders or cones about one axis: it moves with them, away from it.
+        m.kind = MovedEdge::kRuling;
+        bool first = true;
+        for (int id : model.edge_faces[e - 1]) {
+          Circle axis;
+          if (!AxisOf(model.face(id), &axis) || (!first && !SameAxis(m.axis, axis, scale))) {
+            m.kind = MovedEdge::kNone;
+            break;
+          }
+          if (first) m.axis = axis, first = false;
+        }
+      } else if (CircleOf(edge, &m.axis)) {
+        m.kind = MovedEdge::kCircle;
+      }
+      if (m.kind == MovedEdge::kNone) continue;
+      bool ok = true;
       for (int id : model.edge_faces[e - 1]) {
-        if (!ok) break;
         const TopoDS_Face& face = model.face(id);
-        if (FaceSurfaceType(face) == SurfaceType::kPlane) continue;  // the move stays in it
+        if (FaceSurfaceType(face) == SurfaceType::kPlane && m.kind == MovedEdge::kCircle)
+          continue;  // the move stays in it
         if (bend_sides[id - 1] == 0) {
           ok = false;
           break;
         }
-        // The face's offset must move the circle's middle away from the axis, as its nodes go.
+        // The face's offset must move the edge's middle away from the axis, as its nodes go.
         double pf, pl;
         Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, pf, pl);
         if (pcurve.IsNull()) {
@@ -103,54 +142,60 @@ std::vector<uint8_t> OffsetCircles(const Model& model, const FacePcurves& pcurve
         const gp_Pnt2d q = pcurve->Value(0.5 * (pf + pl));
         std::unique_ptr<Surface> surface = MakeFaceSurface(face, false, pcurves.Bounds(model, id));
         const Vec3 at = surface->Point(q.X(), q.Y());
-        ok = bend_sides[id - 1] * Dot(surface->Normal(q.X(), q.Y()), Radial(circle, at)) > 0.5;
+        ok = bend_sides[id - 1] * Dot(surface->Normal(q.X(), q.Y()), Radial(m.axis, at)) > 0.5;
+        if (!ok) break;
       }
-      candidate[e - 1] = ok;
+      if (ok) candidate[e - 1] = m;
     } catch (const Standard_Failure&) {
-      candidate[e - 1] = 0;
+      candidate[e - 1] = MovedEdge();
     }
   }
-  // Each vertex of a candidate: at it, that circle and edges of one face only.
-  std::vector<int> circle_at(model.vertices.Extent() + 1, 0);   // the one candidate, -1 more
-  std::vector<uint8_t> shared(model.vertices.Extent() + 1, 0);  // an edge of several faces
+  // A vertex moves when every edge at it is a candidate about one axis, or an edge of one face.
+  const int nv = model.vertices.Extent();
+  std::vector<int> first(nv + 1, 0);  // the first candidate edge at the vertex
+  std::vector<uint8_t> blocked(nv + 1, 0);
   for (int e = 1; e <= ne; ++e) {
     TopoDS_Vertex ends[2];
     TopExp::Vertices(model.edge(e), ends[0], ends[1]);
     for (const TopoDS_Vertex& v : ends) {
       const int id = v.IsNull() ? 0 : model.vertices.FindIndex(v);
       if (id == 0) continue;
-      if (candidate[e - 1])
-        circle_at[id] = circle_at[id] == 0 || circle_at[id] == e ? e : -1;
-      else if (model.edge_faces[e - 1].size() > 1)
-        shared[id] = 1;
+      if (candidate[e - 1].kind != MovedEdge::kNone) {
+        if (first[id] == 0)
+          first[id] = e;
+        else if (!SameAxis(candidate[first[id] - 1].axis, candidate[e - 1].axis, scale))
+          blocked[id] = 1;
+      } else if (model.edge_faces[e - 1].size() > 1) {
+        blocked[id] = 1;
+      }
     }
   }
-  std::vector<uint8_t> circles(ne, 0);
+  std::vector<MovedEdge> moved(ne);
   for (int e = 1; e <= ne; ++e) {
-    if (!candidate[e - 1]) continue;
+    if (candidate[e - 1].kind == MovedEdge::kNone) continue;
     TopoDS_Vertex ends[2];
     TopExp::Vertices(model.edge(e), ends[0], ends[1]);
-    bool own = true;
+    bool free = true;
     for (const TopoDS_Vertex& v : ends) {
       const int id = v.IsNull() ? 0 : model.vertices.FindIndex(v);
-      own = own && id > 0 && circle_at[id] == e && !shared[id];
+      free = free && id > 0 && !blocked[id];
     }
-    circles[e - 1] = own;
+    if (free) moved[e - 1] = candidate[e - 1];
   }
-  return circles;
+  return moved;
 }
 
-void MoveCircleGrids(const Model& model, const std::vector<uint8_t>& circles, double distance,
-                     std::vector<EdgeGrid>* grids, std::map<int, Vec3>* vertices) {
+void MoveEdgeGrids(const Model& model, const std::vector<MovedEdge>& edges, double distance,
+                   std::vector<EdgeGrid>* grids, std::map<int, Vec3>* vertices) {
   for (int e = 1; e <= model.edge_count(); ++e) {
     EdgeGrid& g = (*grids)[e - 1];
-    Circle circle;
-    if (!circles[e - 1] || g.xyz.empty() || !CircleOf(model.edge(e), &circle)) continue;
-    for (Vec3& p : g.xyz) p = p + distance * Radial(circle, p);
+    const MovedEdge& m = edges[e - 1];
+    if (m.kind == MovedEdge::kNone || g.xyz.empty()) continue;
+    for (Vec3& p : g.xyz) p = p + distance * Radial(m.axis, p);
     for (int v : {g.first_vertex, g.last_vertex}) {
       const gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(model.vertices(v)));
       const Vec3 at{p.X(), p.Y(), p.Z()};
-      (*vertices)[v] = at + distance * Radial(circle, at);
+      (*vertices)[v] = at + distance * Radial(m.axis, at);
     }
     g.xyz.front() = (*vertices)[g.first_vertex], g.xyz.back() = (*vertices)[g.last_vertex];
   }

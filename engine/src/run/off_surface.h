@@ -24,18 +24,33 @@ class Model;
 std::vector<int8_t> FaceBendSides(const Model& model, const FacePcurves& pcurves,
                                   const std::vector<int>& faces, bool nurbs, int threads);
 
-/// Per edge id - 1: 1 for a circle whose every face is a plane or bends toward the circle's
-/// centre (an offset along its bend side moves away from the axis), of the edges `edge_needed`
-/// marks, with both vertices of their own: every edge at each vertex is such a circle or an edge
-/// of one face only (a seam). Vertices move with their circle (MoveCircleGrids).
-std::vector<uint8_t> OffsetCircles(const Model& model, const FacePcurves& pcurves,
+/// A circle or a line about an axis (a point on it, and its unit direction).
+struct Circle {
+  Vec3 center, axis;
+};
+
+/// An edge whose grid moves off its curve with its faces, away from an axis.
+struct MovedEdge {
+  enum Kind { kNone, kCircle, kRuling };
+  Kind kind = kNone;
+  Circle axis;  ///< a circle's own; a ruling's faces' (cylinders or cones about it)
+};
+
+/// Per edge id - 1, of the edges `edge_needed` marks, those that move with their faces:
+/// - a circle whose every face is a plane (the move stays in it) or bends toward the circle's
+///   axis (an offset along its bend side moves away from the axis);
+/// - a line whose faces are cylinders or cones about one axis, bending toward it (a ruling: the
+///   line between the halves of a split cylinder);
+/// with both vertices free to move: every edge at each is such an edge about the same axis, or
+/// an edge of one face only (a seam). Their vertices move with them (MoveEdgeGrids).
+std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurves,
                                    const std::vector<int8_t>& bend_sides,
                                    const std::vector<bool>& edge_needed);
 
-/// Moves every node of the circles `circles` marks, their vertices included, `distance` away
-/// from the circle's axis, within its plane; the vertices' new points into *vertices (vertex id
-/// to point), for the face domains (which take vertices from the model).
-void MoveCircleGrids(const Model& model, const std::vector<uint8_t>& circles, double distance,
-                     std::vector<EdgeGrid>* grids, std::map<int, Vec3>* vertices);
+/// Moves every node of the edges `edges` marks, their vertices included, `distance` away from
+/// their axis, square to it; the vertices' new points into *vertices (vertex id to point), for
+/// the face domains (which take vertices from the model).
+void MoveEdgeGrids(const Model& model, const std::vector<MovedEdge>& edges, double distance,
+                   std::vector<EdgeGrid>* grids, std::map<int, Vec3>* vertices);
 
 }  // namespace rdmesh

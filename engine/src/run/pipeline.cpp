@@ -27,7 +27,7 @@ namespace {
 // What an off-surface run decides before its faces (run/off_surface.h); empty otherwise.
 struct OffSurfacePlan {
   std::vector<int8_t> bend_sides;      // per face id - 1
-  std::vector<uint8_t> circles;        // per edge id - 1: moved with their faces
+  std::vector<MovedEdge> edges;        // per edge id - 1: moved with their faces
   std::map<int, Vec3> moved_vertices;  // vertex id -> its point, moved with its circle
 };
 
@@ -108,10 +108,10 @@ Status MakeEdgeGrids(const Model& model, const FacePcurves& pcurves, const MeshO
   gc.rd_tolerance = options.rd_tolerance / 5;  // faces carry ~5x the RD of their edges
   gc.max_length = options.max_edge_length;
   gc.min_length = options.min_edge_length;
-  if (!plan.circles.empty()) {
+  if (!plan.edges.empty()) {
     gc.edge_scale.assign(model.edge_count(), 1.0);
     for (int e = 1; e <= model.edge_count(); ++e)
-      if (plan.circles[e - 1]) gc.edge_scale[e - 1] = 2 * kOffSurfaceShare;
+      if (plan.edges[e - 1].kind == MovedEdge::kCircle) gc.edge_scale[e - 1] = 2 * kOffSurfaceShare;
   }
   return BuildEdgeGrids(model, pcurves, gc, options.threads, sel.edge_needed, context, grids);
 }
@@ -236,11 +236,11 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   FacePcurves pcurves = FacePcurves::Build(model, faces, options.threads, context);
   if (Stopped(context)) return context->StopStatus();
 
-  // Off the surface: which way each face bends, and the circles that move with their faces.
+  // Off the surface: which way each face bends, and the edges that move with their faces.
   OffSurfacePlan plan;
   if (options.off_surface) {
     plan.bend_sides = FaceBendSides(model, pcurves, sel->todo, options.nurbs, options.threads);
-    plan.circles = OffsetCircles(model, pcurves, plan.bend_sides, sel->edge_needed);
+    plan.edges = OffsetEdges(model, pcurves, plan.bend_sides, sel->edge_needed);
   }
   std::vector<EdgeGrid> grids;
   Status st = MakeEdgeGrids(model, pcurves, options, deviation, *sel, plan, context, &grids);
@@ -248,9 +248,8 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   // 4. Heal: split grid segments until every face's boundary loops are valid in (u,v).
   st = HealEdgeGrids(model, pcurves, sel->todo, options.nurbs, options.threads, context, &grids);
   if (!st.ok()) return st;
-  if (!plan.circles.empty())
-    MoveCircleGrids(model, plan.circles, kOffSurfaceShare * deviation, &grids,
-                    &plan.moved_vertices);
+  if (!plan.edges.empty())
+    MoveEdgeGrids(model, plan.edges, kOffSurfaceShare * deviation, &grids, &plan.moved_vertices);
   result.summary.edge_seconds = SecondsSince(t0);
 
   auto t1 = Clock::now();
