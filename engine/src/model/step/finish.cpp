@@ -6,6 +6,7 @@
 #include "model/step/finish.h"
 
 #include <Adaptor3d_CurveOnSurface.hxx>
+#include <BRepClass3d_SolidExplorer.hxx>
 #include <BRepLib.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_TEdge.hxx>
@@ -15,6 +16,9 @@
 #include <GeomAdaptor_Surface.hxx>
 #include <Geom_Plane.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
+#include <IntCurvesFace_Intersector.hxx>
+#include <NCollection_IndexedDataMap.hxx>
+#include <Precision.hxx>
 #include <ShapeAnalysis_Edge.hxx>
 #include <ShapeBuild_ReShape.hxx>
 #include <Standard_ErrorHandler.hxx>
@@ -25,15 +29,23 @@
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
 #include <TopTools_MapOfShape.hxx>
+#include <TopTools_ShapeMapHasher.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Iterator.hxx>
+#include <TopoDS_Shell.hxx>
+#include <TopoDS_Solid.hxx>
 #include <TopoDS_Vertex.hxx>
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <gp.hxx>
+#include <gp_Lin.hxx>
+#include <math_BullardGenerator.hxx>
+#include <memory>
+#include <numeric>
 #include <unordered_map>
 #include <vector>
 
@@ -243,6 +255,210 @@ void FixVertexTolerancesInParallel(const TopoDS_Shape& shape, const Handle(Shape
     if (!v2.IsNull())
       current[v2.TShape().get()] = BRep_Tool::Tolerance(TopoDS::Vertex(tool->Context()->Apply(v2)));
   }
+}
+
+namespace {
+
+// How ShapeFix_Shell::FixFaceOrientation and ShapeFix_Shell::Perform (faces not fixed) see a
+// shell. kChanges: they may change something (a face repeated, INTERNAL or without edges, faces
+// in several connected parts, an edge used more than twice or twice the same way). Otherwise
+// they rebuild nothing: kClosed, every edge but degenerated ones used twice; kOpen, some once.
+enum class ShellState { kChanges, kClosed, kOpen };
+
+ShellState ShellStateOf(const TopoDS_Shape& shell) {
+  std::vector<TopoDS_Shape> faces;
+  TopTools_MapOfShape distinct;
+  for (TopoDS_Iterator it(shell); it.More(); it.Next()) {
+    const TopoDS_Shape& face = it.Value();
+    if (face.ShapeType() != TopAbs_FACE || !distinct.Add(face)) return ShellState::kChanges;
+    if (face.Orientation() != TopAbs_FORWARD && face.Orientation() != TopAbs_REVERSED)
+      return ShellState::kChanges;
+    faces.push_back(face);
+  }
+  // One face is a shell GetShells takes apart and builds again.
+  if (faces.size() < 2) return ShellState::kChanges;
+  struct Uses {
+    int count = 0;
+    int face[2] = {0, 0};
+    TopAbs_Orientation orientation[2] = {TopAbs_FORWARD, TopAbs_FORWARD};
+  };
+  NCollection_IndexedDataMap<TopoDS_Shape, Uses, TopTools_ShapeMapHasher> uses;
+  for (size_t f = 0; f < faces.size(); ++f) {
+    bool any = false;
+    for (TopExp_Explorer ex(faces[f], TopAbs_EDGE); ex.More(); ex.Next()) {
+      const TopoDS_Shape& edge = ex.Current();
+      if (edge.Orientation() != TopAbs_FORWARD && edge.Orientation() != TopAbs_REVERSED)
+        return ShellState::kChanges;
+      any = true;
+      int index = uses.FindIndex(edge);
+      if (index == 0) index = uses.Add(edge, Uses());
+      Uses& use = uses.ChangeFromIndex(index);
+      if (use.count == 2) return ShellState::kChanges;
+      use.face[use.count] = static_cast<int>(f);
+      use.orientation[use.count] = edge.Orientation();
+      ++use.count;
+    }
+    if (!any) return ShellState::kChanges;
+  }
+  std::vector<int> parent(faces.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&parent](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  bool open = false, bounded = false;
+  for (int i = 1; i <= uses.Extent(); ++i) {
+    const Uses& use = uses(i);
+    const bool degenerated = BRep_Tool::Degenerated(TopoDS::Edge(uses.FindKey(i)));
+    if (!degenerated) bounded = true;
+    if (use.count == 1) {
+      open = open || !degenerated;
+      continue;
+    }
+    if (use.orientation[0] == use.orientation[1]) return ShellState::kChanges;
+    parent[root(use.face[0])] = root(use.face[1]);
+  }
+  for (size_t f = 1; f < faces.size(); ++f)
+    if (root(static_cast<int>(f)) != root(0)) return ShellState::kChanges;
+  // Without edges that are not degenerated OCCT finds the shell neither closed nor open.
+  if (!bounded) return ShellState::kChanges;
+  return open ? ShellState::kOpen : ShellState::kClosed;
+}
+
+// The normal BRepClass3d_SClassifier shoots its ray against (its FaceNormal): the surface's,
+// reversed on a reversed face; false where it vanishes.
+bool ProbeNormal(const TopoDS_Face& face, double u, double v, gp_Dir* normal) {
+  gp_Pnt point;
+  gp_Vec d1u, d1v;
+  BRep_Tool::Surface(face)->D1(u, v, point, d1u, d1v);
+  gp_Vec n = d1u.Crossed(d1v);
+  if (n.Magnitude() <= gp::Resolution()) return false;
+  n.Normalize();
+  normal->SetXYZ(n.XYZ());
+  if (face.Orientation() == TopAbs_REVERSED) normal->Reverse();
+  return true;
+}
+
+// ShapeFix_Solid::SolidFromShell's test: whether the solid bounded by `shell` holds the infinite
+// point (then OCCT reverses the shell), as BRepClass3d_SolidClassifier::PerformInfinitePoint
+// answers it: the same probes from the same random sequence, against each face's
+// IntCurvesFace_Intersector in the same order. Its explorer builds those one face after the
+// other, with a box and a tree of edges the test does not read; here they are built in
+// parallel, on separate faces. An exception counts as no, as in SolidFromShell.
+bool InsideOut(const TopoDS_Shape& shell, const ParallelRunner& runner) {
+  try {
+    OCC_CATCH_SIGNALS
+    BRep_Builder builder;
+    TopoDS_Solid solid;
+    builder.MakeSolid(solid);
+    builder.Add(solid, shell);
+    std::vector<TopoDS_Face> faces;
+    for (TopExp_Explorer ex(solid, TopAbs_FACE); ex.More(); ex.Next())
+      faces.push_back(TopoDS::Face(ex.Current()));
+    const int count = static_cast<int>(faces.size());
+    if (count == 0) return true;  // the classifier's solid without faces: IN
+    std::vector<std::unique_ptr<IntCurvesFace_Intersector>> intersectors(faces.size());
+    std::atomic<bool> failed{false};
+    runner.For(
+        0, count,
+        [&](int i) {
+          try {
+            OCC_CATCH_SIGNALS
+            intersectors[i] = std::make_unique<IntCurvesFace_Intersector>(
+                faces[i], Precision::Confusion(), Standard_True, Standard_False);
+          } catch (...) {
+            failed = true;
+          }
+        },
+        Partition::kOnePerTask);
+    if (failed) return false;
+    constexpr int kProbesPerFace = 10;
+    math_BullardGenerator random;
+    for (int attempt = 0; attempt < kProbesPerFace; ++attempt) {
+      for (const TopoDS_Face& face : faces) {
+        double param = 0.1 + 0.8 * random.NextReal();
+        gp_Pnt point;
+        double u = 0., v = 0.;
+        gp_Dir normal;
+        if (!BRepClass3d_SolidExplorer::FindAPointInTheFace(face, point, u, v, param) ||
+            !ProbeNormal(face, u, v, &normal))
+          continue;
+        const gp_Lin line(point, -normal);
+        double nearest = RealLast();
+        TopAbs_State state = TopAbs_OUT;
+        IntCurveSurface_TransitionOnCurve transition = IntCurveSurface_Tangent;
+        for (const auto& intersector : intersectors) {
+          intersector->Perform(line, -RealLast(), nearest);
+          if (!intersector->IsDone() || intersector->NbPnt() == 0) continue;
+          int first = 1;
+          for (int i = 2; i <= intersector->NbPnt(); ++i)
+            if (intersector->WParameter(i) < intersector->WParameter(first)) first = i;
+          nearest = intersector->WParameter(first);
+          state = intersector->State(first);
+          transition = intersector->Transition(first);
+        }
+        if (state == TopAbs_IN) {
+          if (transition == IntCurveSurface_Out) return true;
+          if (transition == IntCurveSurface_In) return false;
+        }
+      }
+    }
+    return false;  // ON
+  } catch (const Standard_Failure&) {
+    return false;
+  }
+}
+
+// The shells ShapeFix_Shape's stages would meet in `shape`, with their states, and the shells
+// of its solids; false where those stages would do more than look at them (a face fixed, a solid
+// of several shells or of an open one, a sub-shape met twice or located).
+bool CollectShells(const TopoDS_Shape& shape, TopTools_MapOfShape* seen,
+                   std::vector<std::pair<TopoDS_Shape, ShellState>>* shells,
+                   std::vector<TopoDS_Shape>* solid_shells) {
+  if (!shape.Location().IsIdentity() || !seen->Add(shape)) return false;
+  switch (shape.ShapeType()) {
+    case TopAbs_COMPOUND:
+    case TopAbs_COMPSOLID:
+      for (TopoDS_Iterator it(shape); it.More(); it.Next())
+        if (!CollectShells(it.Value(), seen, shells, solid_shells)) return false;
+      return true;
+    case TopAbs_SOLID: {
+      TopoDS_Iterator it(shape);
+      if (!it.More()) return false;
+      const TopoDS_Shape shell = it.Value();
+      it.Next();
+      if (it.More() || shell.ShapeType() != TopAbs_SHELL || !shell.Location().IsIdentity())
+        return false;
+      if (ShellStateOf(shell) != ShellState::kClosed) return false;
+      solid_shells->push_back(shell);
+      return true;
+    }
+    case TopAbs_SHELL: {
+      const ShellState state = ShellStateOf(shape);
+      if (state == ShellState::kChanges) return false;
+      shells->emplace_back(shape, state);
+      return true;
+    }
+    default:
+      return false;
+  }
+}
+
+}  // namespace
+
+bool ShellAndSolidStagesWithoutChange(const TopoDS_Shape& shape, const ParallelRunner& runner) {
+  TopTools_MapOfShape seen;
+  std::vector<std::pair<TopoDS_Shape, ShellState>> shells;
+  std::vector<TopoDS_Shape> solid_shells;
+  if (shape.IsNull() || !CollectShells(shape, &seen, &shells, &solid_shells)) return false;
+  for (const TopoDS_Shape& shell : solid_shells)
+    if (InsideOut(shell, runner)) return false;
+  // ShapeFix_Shell::Perform clears the flag of a shell with free edges; ShapeFix_Solid sets it
+  // on the shell of a solid it found closed.
+  for (auto& [shell, state] : shells)
+    if (state == ShellState::kOpen && shell.Closed()) shell.Closed(false);
+  for (TopoDS_Shape& shell : solid_shells) shell.Closed(true);
+  return true;
 }
 
 namespace {

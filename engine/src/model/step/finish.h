@@ -21,6 +21,16 @@ bool SameParameterInParallel(const TopoDS_Shape& shape, const ParallelRunner& ru
 void FixVertexTolerancesInParallel(const TopoDS_Shape& shape, const Handle(ShapeFix_Edge) & tool,
                                    const ParallelRunner& runner);
 
+/// ShapeFix_Shape's shell and solid stages as the reader runs them on items whose faces are
+/// fixed already (ShapeFix_Shell without face fixing, ShapeFix_Solid without open solids), where
+/// they provably change nothing: every solid holds one shell, every shell's faces are distinct
+/// and connected through edges each used once FORWARD and once REVERSED (or, in a shell outside
+/// a solid, once: a free edge; degenerated edges also once), and no solid is inside out. Then the
+/// flags those stages set are set and true is returned; otherwise nothing is done and false is
+/// returned (the caller runs OCCT's). The solids' orientation test builds its face intersectors
+/// on `runner`.
+bool ShellAndSolidStagesWithoutChange(const TopoDS_Shape& shape, const ParallelRunner& runner);
+
 /// BRepLib::EncodeRegularity(shape, angle).
 void EncodeRegularityInParallel(const TopoDS_Shape& shape, double angle,
                                 const ParallelRunner& runner);

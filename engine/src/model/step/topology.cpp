@@ -1308,8 +1308,13 @@ void FinishItem(BrepItem* item, const TopoDS_Shape& merged,
   // ShapeFix_Shape's last two stages run below, their checks in parallel.
   fix->FixSameParameterMode() = 0;
   fix->FixVertexTolMode() = 0;
-  fix->Perform();
-  TopoDS_Shape result = fix->Shape();
+  // Where the shell and solid stages would change nothing, Perform would return `merged` with
+  // its context empty.
+  TopoDS_Shape result = merged;
+  if (!ShellAndSolidStagesWithoutChange(merged, runner)) {
+    fix->Perform();
+    result = fix->Shape();
+  }
   if (!result.IsNull()) {
     if (!SameParameterInParallel(result, runner)) ShapeFix::SameParameter(result, Standard_False);
     // The edge tool works through the shape's context, as after ShapeFix_Face has run.
