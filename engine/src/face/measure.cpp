@@ -539,7 +539,7 @@ double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3], int edges, 
 
 double SurfaceSideDeviation(Surface& s, const Vec2 uv[3], Vec2 extra, const Vec3* near, int count,
                             Vec2* where) {
-  constexpr int kN = 4;
+  constexpr int kN = 8;
   double best = 0;
   auto sample = [&](Vec2 q) {
     const Vec3 x = s.Point(q.x, q.y);

@@ -199,6 +199,28 @@ double ConeOffset(Vec3 x, Vec3 o, Vec3 a, double angle) {
   return (2.0 + z * std::tan(angle) - Norm((x - o) - z * a)) * std::cos(angle);
 }
 
+TEST(MeasureTest, SurfaceSideSeesTheSurfaceOverTheTriangle) {
+  // A cylinder of radius 1, S(u,v) = (cos u, sin u, v): the triangle of (u,v) corners (0,0),
+  // (0.5,0), (0.5,1) lies under an arc of 0.5 rad whose sagitta 1 - cos(0.25) is the surface's
+  // largest distance from it, at the middle of the edge u = 0.25..., seen from the surface.
+  auto cylinder = MakeCylinderSurface(1.0);
+  const Vec2 uv[3] = {{0, 0}, {0.5, 0}, {0.5, 1}};
+  Vec3 p[3];
+  for (int i = 0; i < 3; ++i) p[i] = cylinder->Point(uv[i].x, uv[i].y);
+  Vec2 where;
+  const double sagitta = 1 - std::cos(0.25);
+  const double d = SurfaceSideDeviation(*cylinder, uv, uv[0], p, 1, &where);
+  EXPECT_GT(d, 0.9 * sagitta);
+  EXPECT_LE(d, sagitta * (1 + 1e-9));
+  // A neighbour nearer to some of the surface points can only lower it.
+  Vec3 both[6] = {p[0], p[1], p[2], p[0], p[2], cylinder->Point(0, 1)};
+  EXPECT_LE(SurfaceSideDeviation(*cylinder, uv, uv[0], both, 2, &where), d);
+  // On a plane the surface is the triangle.
+  auto plane = MakePlaneSurface();
+  for (int i = 0; i < 3; ++i) p[i] = plane->Point(uv[i].x, uv[i].y);
+  EXPECT_NEAR(SurfaceSideDeviation(*plane, uv, uv[0], p, 1, &where), 0, 1e-15);
+}
+
 TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
   for (bool cylinder : {false, true}) {
     const double radius = 2.5;
