@@ -454,7 +454,7 @@ class FaceRun {
     if (Stopping()) return Stop();
     if (!job_.nurbs) ExactPoleNormals(face_, *refs, &f_);
     f_.max_deviation = stats_.max_deviation;
-    f_.offset = face_.Orientation() == TopAbs_REVERSED ? -offset_ : offset_;
+    f_.offset = offset_ == 0 ? 0.0 : face_.Orientation() == TopAbs_REVERSED ? -offset_ : offset_;
     f_.status = FaceStatus::kOk;
     return true;
   }

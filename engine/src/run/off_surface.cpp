@@ -26,6 +26,13 @@ namespace {
 // BendSide's samples: the centres of a grid of this many cells a side over the face's (u,v)
 // bounds.
 constexpr int kBendGrid = 6;
+// A curve is checked for its bend, and against its faces, at this many steps along it.
+constexpr int kCurveSamples = 24;
+// Its direction away from its bend may turn between steps by at most acos(this) (an inflection
+// flips it).
+constexpr double kCurveTurn = 0.5;
+// The edges at a vertex must move it the same way, within acos(this).
+constexpr double kSameWay = 0.999;
 
 bool CircleOf(const TopoDS_Edge& edge, Circle* circle) {
   BRepAdaptor_Curve curve(edge);
@@ -85,6 +92,26 @@ bool AxisOf(const TopoDS_Face& face, Circle* axis) {
   return true;
 }
 
+// The unit direction away from the centre of curvature of the curve at t (its principal normal,
+// reversed): where a chord's middle falls short of the arc. Zero where it does not bend.
+Vec3 AwayFromBend(const BRepAdaptor_Curve& curve, double t, double scale) {
+  gp_Pnt p;
+  gp_Vec d1, d2;
+  curve.D2(t, p, d1, d2);
+  const double l2 = d1.SquareMagnitude();
+  if (!(l2 > 0)) return {};
+  const gp_Vec k = (d2 - d1 * (d2.Dot(d1) / l2)) / l2;  // the curvature vector
+  const double norm = k.Magnitude();
+  if (!(norm * scale > 1e-6)) return {};
+  return {-k.X() / norm, -k.Y() / norm, -k.Z() / norm};
+}
+
+// Where the edge's nodes move, as a unit direction at the curve's point `at` (parameter t).
+Vec3 MoveDirection(const MovedEdge& m, const BRepAdaptor_Curve& curve, double t, Vec3 at,
+                   double scale) {
+  return m.kind == MovedEdge::kCurve ? AwayFromBend(curve, t, scale) : Radial(m.axis, at);
+}
+
 bool SameAxis(const Circle& a, const Circle& b, double scale) {
   if (Norm(Cross(a.axis, b.axis)) > 1e-9) return false;
   const Vec3 d = b.center - a.center;
@@ -121,13 +148,25 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
         }
       } else if (CircleOf(edge, &m.axis)) {
         m.kind = MovedEdge::kCircle;
+      } else {
+        // Another curve that bends one way along its length (no inflection, nowhere straight):
+        // its nodes move away from its centre of curvature.
+        m.kind = MovedEdge::kCurve;
+        double f, l;
+        BRep_Tool::Range(edge, f, l);
+        Vec3 last;
+        for (int k = 0; k <= kCurveSamples && m.kind == MovedEdge::kCurve; ++k) {
+          const Vec3 away = AwayFromBend(curve, f + (l - f) * k / kCurveSamples, scale);
+          if (Norm(away) == 0 || (k > 0 && Dot(away, last) < kCurveTurn)) m.kind = MovedEdge::kNone;
+          last = away;
+        }
       }
       if (m.kind == MovedEdge::kNone) continue;
       bool ok = true;
       for (int id : model.edge_faces[e - 1]) {
         const TopoDS_Face& face = model.face(id);
-        if (FaceSurfaceType(face) == SurfaceType::kPlane && m.kind == MovedEdge::kCircle)
-          continue;  // the move stays in it
+        if (FaceSurfaceType(face) == SurfaceType::kPlane && m.kind != MovedEdge::kRuling)
+          continue;  // a plane's curve bends within it: the move stays in it
         if (bend_sides[id - 1] == 0) {
           ok = false;
           break;
@@ -139,10 +178,15 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
           ok = false;
           break;
         }
-        const gp_Pnt2d q = pcurve->Value(0.5 * (pf + pl));
         std::unique_ptr<Surface> surface = MakeFaceSurface(face, false, pcurves.Bounds(model, id));
-        const Vec3 at = surface->Point(q.X(), q.Y());
-        ok = bend_sides[id - 1] * Dot(surface->Normal(q.X(), q.Y()), Radial(m.axis, at)) > 0.5;
+        for (int k = 1; k < kCurveSamples && ok; ++k) {
+          const double t = pf + (pl - pf) * k / kCurveSamples;
+          const gp_Pnt2d q = pcurve->Value(t);
+          const Vec3 at = surface->Point(q.X(), q.Y());
+          ok = bend_sides[id - 1] *
+                   Dot(surface->Normal(q.X(), q.Y()), MoveDirection(m, curve, t, at, scale)) >
+               0.5;
+        }
         if (!ok) break;
       }
       if (ok) candidate[e - 1] = m;
@@ -150,24 +194,31 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
       candidate[e - 1] = MovedEdge();
     }
   }
-  // A vertex moves when every edge at it is a candidate about one axis, or an edge of one face.
+  // A vertex moves when every edge at it is a candidate that moves it the same way, or an edge
+  // of one face.
   const int nv = model.vertices.Extent();
-  std::vector<int> first(nv + 1, 0);  // the first candidate edge at the vertex
+  std::vector<Vec3> way(nv + 1);  // the first candidate's direction at the vertex
   std::vector<uint8_t> blocked(nv + 1, 0);
   for (int e = 1; e <= ne; ++e) {
     TopoDS_Vertex ends[2];
     TopExp::Vertices(model.edge(e), ends[0], ends[1]);
-    for (const TopoDS_Vertex& v : ends) {
+    double f = 0, l = 0;
+    if (candidate[e - 1].kind != MovedEdge::kNone) BRep_Tool::Range(model.edge(e), f, l);
+    for (int end = 0; end < 2; ++end) {
+      const TopoDS_Vertex& v = ends[end];
       const int id = v.IsNull() ? 0 : model.vertices.FindIndex(v);
       if (id == 0) continue;
-      if (candidate[e - 1].kind != MovedEdge::kNone) {
-        if (first[id] == 0)
-          first[id] = e;
-        else if (!SameAxis(candidate[first[id] - 1].axis, candidate[e - 1].axis, scale))
-          blocked[id] = 1;
-      } else if (model.edge_faces[e - 1].size() > 1) {
-        blocked[id] = 1;
+      if (candidate[e - 1].kind == MovedEdge::kNone) {
+        if (model.edge_faces[e - 1].size() > 1) blocked[id] = 1;
+        continue;
       }
+      const gp_Pnt p = BRep_Tool::Pnt(v);
+      const Vec3 d = MoveDirection(candidate[e - 1], BRepAdaptor_Curve(model.edge(e)),
+                                   end == 0 ? f : l, {p.X(), p.Y(), p.Z()}, scale);
+      if (Norm(way[id]) == 0)
+        way[id] = d;
+      else if (!(Dot(way[id], d) >= kSameWay))
+        blocked[id] = 1;
     }
   }
   std::vector<MovedEdge> moved(ne);
@@ -187,15 +238,20 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
 
 void MoveEdgeGrids(const Model& model, const std::vector<MovedEdge>& edges, double distance,
                    std::vector<EdgeGrid>* grids, std::map<int, Vec3>* vertices) {
+  const double scale = std::max(1.0, model.info.diagonal);
   for (int e = 1; e <= model.edge_count(); ++e) {
     EdgeGrid& g = (*grids)[e - 1];
     const MovedEdge& m = edges[e - 1];
     if (m.kind == MovedEdge::kNone || g.xyz.empty()) continue;
-    for (Vec3& p : g.xyz) p = p + distance * Radial(m.axis, p);
-    for (int v : {g.first_vertex, g.last_vertex}) {
+    const BRepAdaptor_Curve curve(model.edge(e));
+    for (size_t k = 0; k < g.xyz.size(); ++k)
+      g.xyz[k] = g.xyz[k] + distance * MoveDirection(m, curve, g.t[k], g.xyz[k], scale);
+    for (int end = 0; end < 2; ++end) {
+      const int v = end == 0 ? g.first_vertex : g.last_vertex;
       const gp_Pnt p = BRep_Tool::Pnt(TopoDS::Vertex(model.vertices(v)));
       const Vec3 at{p.X(), p.Y(), p.Z()};
-      (*vertices)[v] = at + distance * Radial(m.axis, at);
+      (*vertices)[v] =
+          at + distance * MoveDirection(m, curve, end == 0 ? g.t.front() : g.t.back(), at, scale);
     }
     g.xyz.front() = (*vertices)[g.first_vertex], g.xyz.back() = (*vertices)[g.last_vertex];
   }

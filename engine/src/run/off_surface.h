@@ -31,9 +31,10 @@ struct Circle {
 
 /// An edge whose grid moves off its curve with its faces, away from an axis.
 struct MovedEdge {
-  enum Kind { kNone, kCircle, kRuling };
+  enum Kind { kNone, kCircle, kRuling, kCurve };
   Kind kind = kNone;
-  Circle axis;  ///< a circle's own; a ruling's faces' (cylinders or cones about it)
+  Circle axis;  ///< a circle's own; a ruling's faces' (cylinders or cones about it); unused for
+                ///< a curve, whose nodes move away from its centre of curvature
 };
 
 /// Per edge id - 1, of the edges `edge_needed` marks, those that move with their faces:
@@ -41,15 +42,19 @@ struct MovedEdge {
 ///   axis (an offset along its bend side moves away from the axis);
 /// - a line whose faces are cylinders or cones about one axis, bending toward it (a ruling: the
 ///   line between the halves of a split cylinder);
+/// - another curve that bends one way all along (no inflection, nowhere straight), whose faces
+///   are planes or bend toward its centre of curvature: it moves away from that centre;
 /// with both vertices free to move: every edge at each is such an edge about the same axis, or
-/// an edge of one face only (a seam). Their vertices move with them (MoveEdgeGrids).
+/// an edge of one face only (a seam), all moving it the same way. Their vertices move with them
+/// (MoveEdgeGrids).
 std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurves,
                                    const std::vector<int8_t>& bend_sides,
                                    const std::vector<bool>& edge_needed);
 
 /// Moves every node of the edges `edges` marks, their vertices included, `distance` away from
-/// their axis, square to it; the vertices' new points into *vertices (vertex id to point), for
-/// the face domains (which take vertices from the model).
+/// their axis, square to it (a curve's: away from its centre of curvature); the vertices' new
+/// points into *vertices (vertex id to point), for the face domains (which take vertices from the
+/// model).
 void MoveEdgeGrids(const Model& model, const std::vector<MovedEdge>& edges, double distance,
                    std::vector<EdgeGrid>* grids, std::map<int, Vec3>* vertices);
 

@@ -84,9 +84,12 @@ Result<Selection> SelectFaces(const Model& model, const MeshOptions& options) {
                     "face id " + std::to_string(id) + " is out of range 1.." + std::to_string(nf));
     sel.wanted[id - 1] = true;
   }
+  // Off the surface, every face is meshed for itself: a placed copy rebuilds its boundary from
+  // its own edges, which would bring the nodes of its seams back onto the surface.
   sel.mesh_it.assign(nf, false);
   for (int f = 1; f <= nf; ++f)
-    if (sel.wanted[f - 1]) sel.mesh_it[model.face_representative[f - 1] - 1] = true;
+    if (sel.wanted[f - 1])
+      sel.mesh_it[options.off_surface ? f - 1 : model.face_representative[f - 1] - 1] = true;
   sel.edge_needed.assign(model.edge_count(), false);
   for (int f = 1; f <= nf; ++f) {
     if (!sel.wanted[f - 1] && !sel.mesh_it[f - 1]) continue;
@@ -111,7 +114,9 @@ Status MakeEdgeGrids(const Model& model, const FacePcurves& pcurves, const MeshO
   if (!plan.edges.empty()) {
     gc.edge_scale.assign(model.edge_count(), 1.0);
     for (int e = 1; e <= model.edge_count(); ++e)
-      if (plan.edges[e - 1].kind == MovedEdge::kCircle) gc.edge_scale[e - 1] = 2 * kOffSurfaceShare;
+      if (plan.edges[e - 1].kind == MovedEdge::kCircle ||
+          plan.edges[e - 1].kind == MovedEdge::kCurve)
+        gc.edge_scale[e - 1] = 2 * kOffSurfaceShare;
   }
   return BuildEdgeGrids(model, pcurves, gc, options.threads, sel.edge_needed, context, grids);
 }
@@ -161,7 +166,7 @@ Status PlaceInstances(const Model& model, const FacePcurves& pcurves, const Sele
   std::vector<int> source_of(nf, -1);  // per representative id - 1: its index in `reps`
   for (int f = 1; f <= nf; ++f) {
     const int rep = model.face_representative[f - 1];
-    if (!sel.wanted[f - 1] || rep == f) continue;
+    if (!sel.wanted[f - 1] || rep == f || sel.mesh_it[f - 1]) continue;  // meshed for itself
     copies.push_back(f);
     if ((*faces)[rep - 1].status != FaceStatus::kOk || source_of[rep - 1] >= 0) continue;
     source_of[rep - 1] = static_cast<int>(reps.size());

@@ -4,11 +4,19 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepBuilderAPI_MakeEdge.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakePrism.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
+#include <BRep_Builder.hxx>
+#include <TopoDS_Compound.hxx>
 #include <algorithm>
 #include <cmath>
+#include <gp_Elips.hxx>
+#include <gp_Trsf.hxx>
 #include <map>
 #include <string>
 #include <utility>
@@ -159,6 +167,76 @@ TEST(OffSurfaceTest, BudgetGivesTheBestTwoSidedMeshForItsTriangles) {
   EXPECT_LT(b.summary.estimated_deviation, 0.6 * a.summary.estimated_deviation);
   auto [lo, hi] = RadialRange(b.mesh, true, 1.0, {});
   EXPECT_LE(std::max(-lo, hi), b.summary.requested_deviation);
+}
+
+TEST(OffSurfaceTest, PlacedCopiesAreMeshedOffTheirSurfaceToo) {
+  // One cylinder placed twice (one TShape): the default mode meshes it once and places the copy;
+  // off the surface each is meshed for itself, seam included.
+  TopoDS_Shape cylinder = BRepPrimAPI_MakeCylinder(1.0, 4.0).Shape();
+  gp_Trsf shift;
+  shift.SetTranslation(gp_Vec(10, 0, 0));
+  TopoDS_Compound both;
+  BRep_Builder builder;
+  builder.MakeCompound(both);
+  builder.Add(both, cylinder);
+  builder.Add(both, cylinder.Moved(TopLoc_Location(shift)));
+  auto model = LoadShape(both, "two cylinders");
+  ASSERT_TRUE(model);
+  MeshOptions options;
+  options.off_surface = true;
+  options.max_deviation_rel = 1e-3;
+  MeshResult r = MeshOrDie(*model, options);
+  const double delta = 1e-3 * GetModelInfo(*model).diagonal;
+  EXPECT_EQ(OpenEdges(r.mesh), 0);
+  int moved = 0;
+  for (const FaceMesh& f : r.faces) {
+    EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+    if (f.surface_type != SurfaceType::kCylinder) continue;
+    ++moved;
+    EXPECT_NEAR(f.offset, kOffSurfaceShare * delta, 1e-12);
+    // Every node of the face, seam included, lies off the surface by the offset.
+    for (size_t i = 0; i < f.xyz.size(); i += 3) {
+      const double x = f.xyz[i] > 5 ? f.xyz[i] - 10 : f.xyz[i];
+      EXPECT_NEAR(std::hypot(x, f.xyz[i + 1]), 1 + f.offset, 1e-9);
+    }
+  }
+  EXPECT_EQ(moved, 2);
+}
+
+TEST(OffSurfaceTest, EllipsesMoveAwayFromTheirBend) {
+  // An elliptic prism: its lateral face (an extrusion) bends one way, its caps are planes, and
+  // the ellipses between them bend one way all along: they move outward, within the caps.
+  const gp_Elips ellipse(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 3.0, 1.0);
+  TopoDS_Wire wire = BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(ellipse).Edge()).Wire();
+  TopoDS_Shape prism =
+      BRepPrimAPI_MakePrism(BRepBuilderAPI_MakeFace(wire).Face(), gp_Vec(0, 0, 2)).Shape();
+  auto model = LoadShape(prism, "elliptic prism");
+  ASSERT_TRUE(model);
+  MeshOptions on;
+  on.max_deviation_rel = 1e-4;
+  MeshOptions off = on;
+  off.off_surface = true;
+  MeshResult a = MeshOrDie(*model, on), b = MeshOrDie(*model, off);
+  std::printf("elliptic prism at 1e-4: %lld triangles on the surface, %lld off it\n",
+              static_cast<long long>(a.summary.triangles),
+              static_cast<long long>(b.summary.triangles));
+  EXPECT_LE(b.summary.triangles, 0.8 * a.summary.triangles);
+  EXPECT_EQ(OpenEdges(b.mesh), 0);
+  const double delta = 1e-4 * GetModelInfo(*model).diagonal;
+  for (const FaceMesh& f : b.faces) {
+    EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+    if (f.surface_type != SurfaceType::kPlane) {
+      EXPECT_NE(f.offset, 0) << f.offset_reason;
+      continue;
+    }
+    // The caps' boundary nodes lie outside the ellipse, by at most the deviation.
+    for (size_t i = 0; i < f.xyz.size(); i += 3) {
+      const double x = f.xyz[i], y = f.xyz[i + 1];
+      const double level = std::sqrt(x * x / 9 + y * y);
+      EXPECT_GT(level, 1.0);
+      EXPECT_LT(level, 1.0 + 1.01 * delta);  // |grad| >= 1/3 ... 1: at most delta / 1 outward
+    }
+  }
 }
 
 TEST(OffSurfaceTest, NeedsADeviationOrABudget) {
