@@ -7,8 +7,13 @@
 #include <unistd.h>
 
 #include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <TopLoc_Location.hxx>
+#include <TopoDS_Compound.hxx>
 #include <TopoDS_Shape.hxx>
 #include <filesystem>
+#include <gp_Trsf.hxx>
+#include <gp_Vec.hxx>
 #include <memory>
 #include <string>
 
@@ -25,6 +30,19 @@ inline std::shared_ptr<const Model> LoadShape(const TopoDS_Shape& shape, const s
   std::filesystem::remove(path);
   EXPECT_TRUE(model.ok()) << model.status().ToString();
   return model.ok() ? *model : nullptr;
+}
+
+/// `shape` and a copy of it moved by (dx, 0, 0), in one compound: the copy's faces are placed
+/// copies (one TShape under two locations).
+inline TopoDS_Compound PlacedTwice(const TopoDS_Shape& shape, double dx) {
+  gp_Trsf shift;
+  shift.SetTranslation(gp_Vec(dx, 0, 0));
+  TopoDS_Compound both;
+  BRep_Builder builder;
+  builder.MakeCompound(both);
+  builder.Add(both, shape);
+  builder.Add(both, shape.Moved(TopLoc_Location(shift)));
+  return both;
 }
 
 /// Loads a bundled model (tests/data) by file name.

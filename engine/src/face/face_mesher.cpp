@@ -413,15 +413,9 @@ class FaceRun {
     if (!base_ || moved_boundary_) return true;
     WorkMesh off_mesh = mesh_;
     RefineStats off_stats = stats_;
-    std::unique_ptr<Surface> off_surface = std::move(surface_);
+    std::unique_ptr<Surface> off_surface = std::move(surface_);  // evaluates through base_
     const double offset = offset_;
-    surface_ = std::move(base_);
-    criteria_ = job_.criteria;
-    offset_ = 0;
-    seeds_.clear();
-    stats_ = RefineStats();
-    PlaceSeeds();
-    if (!Triangulate() || !Refine()) return false;
+    if (!BackOnSurface()) return false;
     const int on = mesh_.TriangleCount(), off = off_mesh.TriangleCount();
     if (on <= off && !Stuck()) {
       char text[160];

@@ -11,12 +11,9 @@
 #include <BRepPrimAPI_MakePrism.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
-#include <BRep_Builder.hxx>
-#include <TopoDS_Compound.hxx>
 #include <algorithm>
 #include <cmath>
 #include <gp_Elips.hxx>
-#include <gp_Trsf.hxx>
 #include <map>
 #include <string>
 #include <utility>
@@ -70,6 +67,15 @@ std::pair<double, double> RadialRange(const Mesh& mesh, bool sphere, double radi
   return {lo, hi};
 }
 
+// The model meshed at `rel` on its surface, and off it.
+std::pair<MeshResult, MeshResult> OnAndOff(const Model& model, double rel) {
+  MeshOptions on;
+  on.max_deviation_rel = rel;
+  MeshOptions off = on;
+  off.off_surface = true;
+  return {MeshOrDie(model, on), MeshOrDie(model, off)};
+}
+
 TEST(OffSurfaceTest, UnitSphereTakesAboutHalfTheInterpolatingMinimum) {
   auto model = LoadShape(BRepPrimAPI_MakeSphere(1.0).Shape(), "sphere");
   ASSERT_TRUE(model);
@@ -100,11 +106,7 @@ TEST(OffSurfaceTest, UnitSphereTakesAboutHalfTheInterpolatingMinimum) {
 TEST(OffSurfaceTest, CylinderCirclesMoveWithTheirFacesAndCapsStayPlanar) {
   auto model = LoadShape(BRepPrimAPI_MakeCylinder(1.0, 4.0).Shape(), "cylinder");
   ASSERT_TRUE(model);
-  MeshOptions on;
-  on.max_deviation_rel = 1e-4;
-  MeshOptions off = on;
-  off.off_surface = true;
-  MeshResult a = MeshOrDie(*model, on), b = MeshOrDie(*model, off);
+  auto [a, b] = OnAndOff(*model, 1e-4);
   const double delta = 1e-4 * GetModelInfo(*model).diagonal;
   // Chords around the circumference twice as long: about 1 / sqrt(2) of the triangles.
   EXPECT_LE(b.summary.triangles, 0.8 * a.summary.triangles);
@@ -172,15 +174,8 @@ TEST(OffSurfaceTest, BudgetGivesTheBestTwoSidedMeshForItsTriangles) {
 TEST(OffSurfaceTest, PlacedCopiesAreMeshedOffTheirSurfaceToo) {
   // One cylinder placed twice (one TShape): the default mode meshes it once and places the copy;
   // off the surface each is meshed for itself, seam included.
-  TopoDS_Shape cylinder = BRepPrimAPI_MakeCylinder(1.0, 4.0).Shape();
-  gp_Trsf shift;
-  shift.SetTranslation(gp_Vec(10, 0, 0));
-  TopoDS_Compound both;
-  BRep_Builder builder;
-  builder.MakeCompound(both);
-  builder.Add(both, cylinder);
-  builder.Add(both, cylinder.Moved(TopLoc_Location(shift)));
-  auto model = LoadShape(both, "two cylinders");
+  auto model =
+      LoadShape(PlacedTwice(BRepPrimAPI_MakeCylinder(1.0, 4.0).Shape(), 10), "two cylinders");
   ASSERT_TRUE(model);
   MeshOptions options;
   options.off_surface = true;
@@ -212,11 +207,7 @@ TEST(OffSurfaceTest, EllipsesMoveAwayFromTheirBend) {
       BRepPrimAPI_MakePrism(BRepBuilderAPI_MakeFace(wire).Face(), gp_Vec(0, 0, 2)).Shape();
   auto model = LoadShape(prism, "elliptic prism");
   ASSERT_TRUE(model);
-  MeshOptions on;
-  on.max_deviation_rel = 1e-4;
-  MeshOptions off = on;
-  off.off_surface = true;
-  MeshResult a = MeshOrDie(*model, on), b = MeshOrDie(*model, off);
+  auto [a, b] = OnAndOff(*model, 1e-4);
   std::printf("elliptic prism at 1e-4: %lld triangles on the surface, %lld off it\n",
               static_cast<long long>(a.summary.triangles),
               static_cast<long long>(b.summary.triangles));

@@ -165,15 +165,7 @@ TEST(PipelineTest, ArcWhoseEndsNearlyMeetIsDiscretised) {
 
 TEST(PipelineTest, AskingForAPlacedCopyAloneMeshesIt) {
   // Two placements of one box: faces 7..12 are copies of faces 1..6.
-  TopoDS_Shape box = BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape();
-  gp_Trsf shift;
-  shift.SetTranslation(gp_Vec(5, 0, 0));
-  TopoDS_Compound both;
-  BRep_Builder builder;
-  builder.MakeCompound(both);
-  builder.Add(both, box);
-  builder.Add(both, box.Moved(TopLoc_Location(shift)));
-  auto model = LoadShape(both, "two_boxes");
+  auto model = LoadShape(PlacedTwice(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape(), 5), "two_boxes");
   ASSERT_TRUE(model);
   ASSERT_EQ(GetModelInfo(*model).faces, 12);
   MeshOptions options;
