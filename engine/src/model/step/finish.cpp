@@ -6,6 +6,7 @@
 #include "model/step/finish.h"
 
 #include <Adaptor3d_CurveOnSurface.hxx>
+#include <BRepAdaptor_Surface.hxx>
 #include <BRepClass3d_SolidExplorer.hxx>
 #include <BRepLib.hxx>
 #include <BRep_Builder.hxx>
@@ -357,6 +358,19 @@ bool InsideOut(const TopoDS_Shape& shell, const ParallelRunner& runner) {
       faces.push_back(TopoDS::Face(ex.Current()));
     const int count = static_cast<int>(faces.size());
     if (count == 0) return true;  // the classifier's solid without faces: IN
+    // B-spline and Bezier surfaces and curves compute their resolution once and keep it
+    // (Geom_BSplineSurface::Resolution): asked here, as the intersectors of faces on other than
+    // elementary surfaces ask, before faces that share such a surface or basis curve are built
+    // together.
+    for (const TopoDS_Face& face : faces) {
+      BRepAdaptor_Surface surface(face, Standard_False);
+      const GeomAbs_SurfaceType type = surface.GetType();
+      if (type == GeomAbs_Plane || type == GeomAbs_Cylinder || type == GeomAbs_Cone ||
+          type == GeomAbs_Sphere || type == GeomAbs_Torus)
+        continue;
+      surface.UResolution(1.);
+      surface.VResolution(1.);
+    }
     std::vector<std::unique_ptr<IntCurvesFace_Intersector>> intersectors(faces.size());
     std::atomic<bool> failed{false};
     runner.For(
