@@ -92,9 +92,12 @@ def render(args, summary, scored=None):
                f"`{args.out_dir}/manifest.jsonl`; {len(rows)} files")
     if "measured_wall_seconds" in summary:
         wall = summary["measured_wall_seconds"]
-        out.append(f"- wall {wall:.0f} s ({len(rows) / wall * 60:.0f} files a minute), CPU "
-                   f"{summary['measured_cpu_seconds']:.0f} s, on a 2-core machine shared "
-                   "with other work")
+        cpu = (f", CPU {summary['measured_cpu_seconds']:.0f} s"
+               if "measured_cpu_seconds" in summary else "")
+        out.append(f"- wall {wall:.0f} s ({len(rows) / wall * 60:.0f} files a minute){cpu}, on a "
+                   "2-core machine shared with other work")
+    if summary.get("note"):
+        out.append(f"- {summary['note']}")
     out += ["", "| status | files | share |", "|---|---:|---:|"]
     for status in ("ok", "failed", "crashed", "timed_out", "unreadable"):
         out.append(f"| {status} | {counts[status]} | {counts[status] / len(rows):.2%} |")

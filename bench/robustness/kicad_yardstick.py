@@ -107,7 +107,37 @@ class Cache:
 
 # What triage found on a file not clean (issue 35), by a part of its path: shown beside rdmesh's
 # reason. Each names the file the cause was found on and how.
-TRIAGE = {}
+TRIAGE = {
+    "CP_Radial_Tantal_D10.5mm": (
+        "the worst sample, the middle of a chord of the bottom arc (z = 0.6) of B-spline faces "
+        "25, 26 and 39, is 0.0327 from face 25 by the yardstick (its foot on the surface at "
+        "v = 0) and 0.0170 by BRepExtrema_DistShapeShape (point to face; the arc lies on the "
+        "surface within 4e-8): 0.72x the request. The yardstick over-estimates here."),
+    "Crystal_C38-LF_D3.0mm_L8.0mm_Horizontal_1EP_style2": (
+        "the worst sample lies in planar face 6's elliptic hole, 2.22e-3 from the face by the "
+        "yardstick and 1.19e-3 by BRepExtrema_DistShapeShape (to the ellipse): 0.99x the "
+        "request. The yardstick over-estimates here."),
+    "NXP_MPL115A1_LGA-8": (
+        "edge tolerances up to 0.4 on a 6 mm part; the four fillet corners (faces 5, 6, 9, 10, "
+        "surfaces of revolution, pcurves 0.4 off their arcs) get 20% of their area (0.054 of "
+        "0.267 each): the loop that RepairLoosePcurves projects onto the surface encloses a "
+        "part of the face; BRepExtrema agrees the worst sample is 0.0069 off face 9."),
+    "SSO-4_6.7x5.1mm": (
+        "8 faces (20, 21, 33, 35, 42, 46, 68, 71) are bilinear B-spline patches (degree 1x1, "
+        "2x2 poles) twisted into a bow-tie: the surface's normal flips inside the face, where "
+        "dS/du vanishes; the refinement splits there without end (face 20 alone, planar: 256 "
+        "triangles, 2.4 s CPU, 'could not be refined to the criteria without folding'; the "
+        "whole file: 109 s CPU on one thread and not done). perf: Measure 23%, "
+        "CachedSurface::Point 15%, OcctSurface::Point 7%, TriangleAgreement 7%."),
+    "SSO-8_6.7x9.8mm": (
+        "the bow-tie bilinear patches of SSO-4 (face 50: the normal flips at v = 0.79)."),
+    "L_CommonMode_Toroid_Vertical_L19.3mm": (
+        "face 220 (cylinder) is bounded by two edges with the same two ends that lie on each "
+        "other within edge 439's tolerance 0.0039: the face has no width, and both chords are "
+        "dropped as a pinch, leaving no loop. Face 151: edge 439's B-spline pcurve drops from "
+        "u = 2pi to 0 inside the 0.0014 mm edge, so the loop sweeps the whole cylinder "
+        "(estimate 0.564, 17x)."),
+}
 
 
 def triage_note(path):
