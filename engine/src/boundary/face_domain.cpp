@@ -146,6 +146,39 @@ void RepairLoosePcurves(const Model& model, const std::vector<EdgeGrid>& grids, 
   }
 }
 
+// A pcurve may cross its surface's seam inside an edge by running back over the whole period (a
+// KiCad toroid's 0.0014 mm edge, whose B-spline pcurve drops from u = 2pi to u = 0 between two
+// of its grid points, issue 35): two points a chord apart in 3D then lie a period apart in
+// (u,v), and the loop sweeps the whole surface. Where the (u,v) middle of two consecutive grid
+// points, the second moved by whole periods next to the first, lies on the edge's curve at the
+// middle parameter and the unmoved middle lies off it by more than twice as far, the walk's
+// points from the second on move by those periods. A step under half a period is never moved.
+void UnwrapSeamJumps(const Model& model, const std::vector<EdgeGrid>& grids, double period_u,
+                     double period_v, Surface& surface, std::vector<EdgeWalk>* walks) {
+  for (EdgeWalk& w : *walks) {
+    const EdgeGrid& g = grids[w.eid - 1];
+    const int n = static_cast<int>(w.uv.size());
+    if (g.degenerate || n != static_cast<int>(g.t.size())) continue;
+    std::unique_ptr<Curve> curve;
+    for (int k = 1; k < n; ++k) {
+      Vec2 shift{0, 0};
+      for (auto [period, axis] : {std::pair(period_u, &Vec2::x), std::pair(period_v, &Vec2::y)})
+        if (period > 0)
+          shift.*axis = period * std::round((w.uv[k - 1].*axis - w.uv[k].*axis) / period);
+      if (shift.x == 0 && shift.y == 0) continue;
+      if (!curve) curve = MakeEdgeCurve(TopoDS::Edge(model.edge(w.eid).Oriented(TopAbs_FORWARD)));
+      if (!curve) break;
+      const int a = w.reversed ? n - k : k - 1, b = w.reversed ? n - 1 - k : k;
+      const Vec3 middle = curve->Point(0.5 * (g.t[a] + g.t[b]));
+      const Vec2 as_is = 0.5 * (w.uv[k - 1] + w.uv[k]), moved = as_is + 0.5 * shift;
+      const double off = Dist(surface.Point(as_is.x, as_is.y), middle);
+      const double on = Dist(surface.Point(moved.x, moved.y), middle);
+      if (!(2 * on < off)) continue;
+      for (int j = k; j < n; ++j) w.uv[j] = w.uv[j] + shift;
+    }
+  }
+}
+
 double VertexTolerance(const Model& model, int vertex_id) {
   return vertex_id > 0 ? BRep_Tool::Tolerance(TopoDS::Vertex(model.vertices(vertex_id))) : 0.0;
 }
@@ -378,6 +411,7 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
     if (!st.ok()) return st;
     if (walks.empty()) continue;
     RepairLoosePcurves(model, grids, period_u, period_v, surface, &walks);
+    UnwrapSeamJumps(model, grids, period_u, period_v, surface, &walks);
     // The slack for pcurve ends that meet: 1e-3 of the loop's extent in (u,v), as before any
     // tolerance is looked at.
     double span = 0;

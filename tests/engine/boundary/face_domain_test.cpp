@@ -29,10 +29,14 @@
 #include <GeomConvert_CompCurveToBSplineCurve.hxx>
 #include <Geom_BSplineCurve.hxx>
 #include <Geom_Circle.hxx>
+#include <Geom_CylindricalSurface.hxx>
 #include <Geom_Line.hxx>
 #include <Geom_SphericalSurface.hxx>
 #include <Geom_TrimmedCurve.hxx>
+#include <TColStd_Array1OfInteger.hxx>
+#include <TColStd_Array1OfReal.hxx>
 #include <TColStd_HArray1OfReal.hxx>
+#include <TColgp_Array1OfPnt2d.hxx>
 #include <TColgp_HArray1OfPnt2d.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -639,6 +643,53 @@ TEST(FaceDomainTest, AnEdgeOnItsFacesIsMeshedByItsCurveWhateverItsTolerance) {
   }
   EXPECT_LE(result->summary.triangles, 100);
   ExpectEveryEdgeUsedTwice(result->mesh.triangles);
+}
+
+// A patch of a unit cylinder across its seam, u in [2pi - 0.2, 2pi + 0.2] and v in [0, 1],
+// whose bottom edge's pcurve crosses the seam inside the edge by running back over the whole
+// period: from u = 2pi - 0.2 to 2pi, then in a parameter step of 1e-6 to 0, then to 0.2 (as a
+// KiCad toroid's B-spline pcurve does, issue 35). The edge's circle lies on the surface.
+TopoDS_Shape SeamPatchWithAJumpingPcurve() {
+  Handle(Geom_CylindricalSurface) cylinder = new Geom_CylindricalSurface(gp_Ax3(), 1.0);
+  TopoDS_Face face = BRepBuilderAPI_MakeFace(cylinder, -0.2, 0.2, 0.0, 1.0, 1e-7).Face();
+  BRep_Builder builder;
+  int jumping = 0;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+    const TopoDS_Edge& e = TopoDS::Edge(ex.Current());
+    double first, last;
+    Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, first, last);
+    const gp_Pnt2d a = pcurve->Value(first), b = pcurve->Value(last);
+    if (std::fabs(a.Y()) > 1e-12 || std::fabs(b.Y()) > 1e-12) continue;
+    // The circle's parameter is the angle; OCCT puts the patch at u in [2pi - 0.2, 2pi + 0.2].
+    EXPECT_LT(first, 2 * M_PI);
+    EXPECT_GT(last, 2 * M_PI);
+    TColgp_Array1OfPnt2d poles(1, 4);
+    poles(1) = gp_Pnt2d(first, 0), poles(2) = gp_Pnt2d(2 * M_PI, 0);
+    poles(3) = gp_Pnt2d(0, 0), poles(4) = gp_Pnt2d(last - 2 * M_PI, 0);
+    TColStd_Array1OfReal knots(1, 4);
+    knots(1) = first, knots(2) = 2 * M_PI, knots(3) = 2 * M_PI + 1e-6, knots(4) = last;
+    TColStd_Array1OfInteger mults(1, 4);
+    mults(1) = 2, mults(2) = 1, mults(3) = 1, mults(4) = 2;
+    builder.UpdateEdge(e, new Geom2d_BSplineCurve(poles, knots, mults, 1), face, 1e-7);
+    ++jumping;
+  }
+  EXPECT_EQ(jumping, 1);
+  return face;
+}
+
+TEST(FaceDomainTest, APcurveThatRunsBackOverThePeriodInsideItsEdgeIsUnwrapped) {
+  const double deviation = 1e-4;
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(
+      MeshFaces(SeamPatchWithAJumpingPcurve(), "jumping_pcurve", deviation, &faces));
+  ASSERT_EQ(faces.size(), 1u);
+  const FaceMesh& f = faces[0];
+  EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+  EXPECT_EQ(f.reason, "");
+  EXPECT_LE(f.max_deviation, deviation * (1 + 1e-9));
+  // The patch, not the whole turn of the cylinder.
+  EXPECT_NEAR(f.exact_area, 0.4, 1e-9);
+  EXPECT_NEAR(f.area, 0.4, 1e-3);
 }
 
 }  // namespace
