@@ -391,7 +391,7 @@ class FaceRun {
         if (w >= 0 && mesh_.alive[w]) mesh_.MeasureCorners(w, scratch, near + 3 * count++);
       }
       double d = DenseDeviation(*base_, uv, near, edges, limit, &where);
-      d = std::max(d, SurfaceSideDeviation(*base_, uv, where, near, count, &where));
+      d = std::max(d, SurfaceSideDeviation(*base_, uv, where, edges, near, count, &where));
       deviation[t] = d, worst = std::max(worst, d);
       if (worst > limit) {
         char text[160];

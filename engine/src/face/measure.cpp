@@ -537,8 +537,8 @@ double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3], int edges, 
   return best;
 }
 
-double SurfaceSideDeviation(Surface& s, const Vec2 uv[3], Vec2 extra, const Vec3* near, int count,
-                            Vec2* where) {
+double SurfaceSideDeviation(Surface& s, const Vec2 uv[3], Vec2 extra, int edges, const Vec3* near,
+                            int count, Vec2* where) {
   constexpr int kN = 8;
   double best = 0;
   auto sample = [&](Vec2 q) {
@@ -548,15 +548,23 @@ double SurfaceSideDeviation(Surface& s, const Vec2 uv[3], Vec2 extra, const Vec3
       d = std::min(d, PointTriangleDistance(x, near[3 * k], near[3 * k + 1], near[3 * k + 2]));
     if (d > best) best = d, *where = q;
   };
+  // Grid node (i, j) has weights (1 - b1 - b2, b1, b2): edge 0 is i + j = kN, edge 1 is i = 0,
+  // edge 2 is j = 0.
   for (int i = 0; i <= kN; ++i) {
     for (int j = 0; i + j <= kN; ++j) {
       if (i == kN || j == kN || i + j == 0) continue;  // the corners lie on the surface
+      if ((i + j == kN && !(edges & 1)) || (i == 0 && !(edges & 2)) || (j == 0 && !(edges & 4)))
+        continue;
       const double b1 = double(i) / kN, b2 = double(j) / kN;
       sample((1 - b1 - b2) * uv[0] + (b1 * uv[1] + b2 * uv[2]));
     }
   }
   sample((1.0 / 3) * (uv[0] + uv[1] + uv[2]));
-  sample(extra);
+  const double area = Orient(uv[0], uv[1], uv[2]);
+  if (area > 0) {
+    const double w0 = Orient(extra, uv[1], uv[2]) / area, w1 = Orient(uv[0], extra, uv[2]) / area;
+    if (w0 > 1e-9 && w1 > 1e-9 && 1 - w0 - w1 > 1e-9) sample(extra);
+  }
   return best;
 }
 
