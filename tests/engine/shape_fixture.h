@@ -45,6 +45,13 @@ inline TopoDS_Compound PlacedTwice(const TopoDS_Shape& shape, double dx) {
   return both;
 }
 
+/// MeshModel's result, failing the test (and returning an empty result) when it is an error.
+inline MeshResult MeshOrDie(const Model& model, const MeshOptions& options = MeshOptions()) {
+  auto result = MeshModel(model, options);
+  EXPECT_TRUE(result.ok()) << result.status().ToString();
+  return result.ok() ? std::move(*result) : MeshResult();
+}
+
 /// Loads a bundled model (tests/data) by file name.
 inline std::shared_ptr<const Model> LoadData(const std::string& file) {
   auto model = LoadModel(std::string(RDMESH_TEST_DATA) + "/" + file);

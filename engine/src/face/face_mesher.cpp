@@ -299,7 +299,7 @@ class FaceRun {
   bool LeaveSurface() {
     const double deviation = job_.criteria.max_deviation;
     if (!(deviation > 0) || surface_->planar) return KeepOn("a plane does not bend");
-    const int side = job_.bend_sides ? (*job_.bend_sides)[face_id_ - 1] : SampledBendSide();
+    const int side = job_.bend_sides ? (*job_.bend_sides)[face_id_ - 1] : 0;
     if (side == 0) return KeepOn("it bends both ways (a saddle) or not at all");
     offset_ = side * kOffSurfaceShare * deviation;
     base_ = std::move(surface_);
@@ -310,27 +310,6 @@ class FaceRun {
     if (!Triangulate()) return false;
     MoveOwnBoundary();
     return true;
-  }
-
-  // BendSide over the first triangulation's triangles and nodes (without a run's plan).
-  int SampledBendSide() {
-    std::vector<Vec2> samples;
-    Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};
-    for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
-      if (!mesh_.alive[t]) continue;
-      Vec2 sum;
-      for (int v : mesh_.tri[t]) {
-        sum = sum + mesh_.uv[v];
-        lo = {std::min(lo.x, mesh_.uv[v].x), std::min(lo.y, mesh_.uv[v].y)};
-        hi = {std::max(hi.x, mesh_.uv[v].x), std::max(hi.y, mesh_.uv[v].y)};
-      }
-      samples.push_back((1.0 / 3) * sum);
-    }
-    for (int v = 0; v < mesh_.node_count(); ++v)
-      if (!mesh_.fixed[v]) samples.push_back(mesh_.uv[v]);
-    if (samples.empty()) return 0;
-    return BendSide(*surface_, samples, kBendStep * (hi.x - lo.x), kBendStep * (hi.y - lo.y),
-                    kBendTolerance);
   }
 
   // Boundary nodes that no other face shares move off the surface with the interior: those of
@@ -381,15 +360,12 @@ class FaceRun {
       const Tri& tri = mesh_.tri[t];
       if (mesh_.pole_axis[tri[0]] + mesh_.pole_axis[tri[1]] + mesh_.pole_axis[tri[2]] > -3)
         continue;  // a pole triangle stands for no patch of its own
-      Vec2 uv[3], scratch[3], where;
+      Vec2 uv[3], where;
       Vec3 near[12];
       mesh_.MeasureCorners(t, uv, near);
-      int edges = 0, count = 1;
-      for (int i = 0; i < 3; ++i) {
-        edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
-        const int w = mesh_.nbr[t][i];
-        if (w >= 0 && mesh_.alive[w]) mesh_.MeasureCorners(w, scratch, near + 3 * count++);
-      }
+      const int count = mesh_.CornersWithNeighbours(t, near);
+      int edges = 0;
+      for (int i = 0; i < 3; ++i) edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
       double d = DenseDeviation(*base_, uv, near, edges, limit, &where);
       d = std::max(d, SurfaceSideDeviation(*base_, uv, where, edges, near, count, &where));
       deviation[t] = d, worst = std::max(worst, d);

@@ -118,12 +118,7 @@ Status Refiner::Verify(int64_t max_triangles) {
       if (!(dense > limit)) {
         // The other way round: the surface over the triangle to it or a neighbour.
         Vec3 near[12];
-        int count = 1;
-        near[0] = p[0], near[1] = p[1], near[2] = p[2];
-        for (int i = 0; i < 3; ++i) {
-          const int w = mesh_.nbr[t][i];
-          if (w >= 0 && mesh_.alive[w]) mesh_.MeasureCorners(w, uv_scratch, near + 3 * count++);
-        }
+        const int count = mesh_.CornersWithNeighbours(t, near);
         dense = SurfaceSideDeviation(surface_, uv, m.worst_uv, edges, near, count, &where);
         if (!(dense > limit)) continue;
         // Over: the nearest triangle may lie one ring further (thin triangles around a corner).

@@ -33,6 +33,17 @@ void WorkMesh::MeasureCorners(const std::array<int, 3>& t, Vec2 q[3], Vec3 x[3])
 
 void WorkMesh::MeasureCorners(int t, Vec2 q[3], Vec3 x[3]) const { MeasureCorners(tri[t], q, x); }
 
+int WorkMesh::CornersWithNeighbours(int t, Vec3 out[12]) const {
+  Vec2 uv[3];
+  MeasureCorners(t, uv, out);
+  int count = 1;
+  for (int i = 0; i < 3; ++i) {
+    const int w = nbr[t][i];
+    if (w >= 0 && alive[w]) MeasureCorners(w, uv, out + 3 * count++);
+  }
+  return count;
+}
+
 void WorkMesh::FoldCorners(const std::array<int, 3>& t, Vec2 q[3], Vec3 x[3], Vec3 n[3]) const {
   for (int i = 0; i < 3; ++i) q[i] = uv[t[i]], x[i] = xyz[t[i]], n[i] = normal[t[i]];
   for (int i = 0; i < 3; ++i) {

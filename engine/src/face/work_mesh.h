@@ -44,6 +44,9 @@ struct WorkMesh {
   /// one the 3D triangle stands for.
   void MeasureCorners(int t, Vec2 uv[3], Vec3 xyz[3]) const;
   void MeasureCorners(const std::array<int, 3>& t, Vec2 uv[3], Vec3 xyz[3]) const;
+  /// MeasureCorners' points of triangle t and of its live neighbours, three per triangle, into
+  /// out[0..12): how many triangles (1 to 4).
+  int CornersWithNeighbours(int t, Vec3 out[12]) const;
   /// The corners of triangle t for the fold guard (TriangleAgreement). The surface normal at a
   /// pole depends on the direction it is approached from, so a pole corner takes its
   /// neighbours' mean normal.

@@ -26,12 +26,6 @@
 namespace rdmesh {
 namespace {
 
-MeshResult MeshOrDie(const Model& model, const MeshOptions& options = MeshOptions()) {
-  auto result = MeshModel(model, options);
-  EXPECT_TRUE(result.ok()) << result.status().ToString();
-  return result.ok() ? std::move(*result) : MeshResult();
-}
-
 // The invariants every run's edge lines keep, checked against the B-rep and the triangles.
 void ExpectConsistentEdgeLines(const Model& model, const MeshResult& r) {
   const Mesh& mesh = r.mesh;

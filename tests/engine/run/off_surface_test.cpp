@@ -24,12 +24,6 @@
 namespace rdmesh {
 namespace {
 
-MeshResult MeshOrDie(const Model& model, const MeshOptions& options) {
-  auto result = MeshModel(model, options);
-  EXPECT_TRUE(result.ok()) << result.status().ToString();
-  return result.ok() ? std::move(*result) : MeshResult();
-}
-
 int OpenEdges(const Mesh& mesh) {
   std::map<std::pair<int, int>, int> uses;
   for (size_t k = 0; k < mesh.triangles.size(); k += 3)

@@ -33,12 +33,6 @@
 namespace rdmesh {
 namespace {
 
-MeshResult MeshOrDie(const Model& model, const MeshOptions& options) {
-  auto result = MeshModel(model, options);
-  EXPECT_TRUE(result.ok()) << result.status().ToString();
-  return result.ok() ? std::move(*result) : MeshResult();
-}
-
 // Edges used by one triangle (free) and by more than two (non-manifold).
 std::pair<int, int> OpenAndNonManifoldEdges(const Mesh& mesh) {
   std::map<std::pair<int, int>, int> uses;
