@@ -129,7 +129,9 @@ Status ParseError(const std::string& name, const std::string& reason) {
 }
 
 // The model is not to blame: the reader ran out of memory.
-Status OutOfMemory(const std::string& name) { return OutOfMemory(name); }
+Status OutOfMemory(const std::string& name) {
+  return Status(StatusCode::kResourceExhausted, "cannot read '" + name + "': out of memory");
+}
 
 // The text after leading whitespace and a UTF-8 byte order mark.
 size_t ContentStart(const std::string& bytes) {
