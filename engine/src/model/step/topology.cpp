@@ -19,7 +19,9 @@
 #include <ElCLib.hxx>
 #include <GeomAdaptor_Curve.hxx>
 #include <GeomConvert_Units.hxx>
+#include <Geom_BSplineCurve.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <Geom_BoundedCurve.hxx>
 #include <Geom_Plane.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_SphericalSurface.hxx>
@@ -44,7 +46,6 @@
 #include <ShapeFix_Wire.hxx>
 #include <Standard_ErrorHandler.hxx>
 #include <Standard_Failure.hxx>
-#include <StepToTopoDS_GeometricTool.hxx>
 #include <TopAbs.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -86,6 +87,63 @@ bool IsBrepItem(const Entities& entities, const Instance& instance) {
   return type == "MANIFOLD_SOLID_BREP" || type == "BREP_WITH_VOIDS" ||
          type == "SHELL_BASED_SURFACE_MODEL" || type == "GEOMETRIC_CURVE_SET" ||
          type == "GEOMETRIC_SET";
+}
+
+void OrderEdgeParameters(const Handle(Geom_Curve) & curve, double& w1, double& w2, double preci) {
+  const double first = curve->FirstParameter();
+  const double last = curve->LastParameter();
+  const double eps = Precision::PConfusion();
+  auto clamp = [first, last](double w) { return w < first ? first : w > last ? last : w; };
+  if (curve->IsKind(STANDARD_TYPE(Geom_BoundedCurve)) && !curve->IsClosed()) {
+    w1 = clamp(w1);
+    w2 = clamp(w2);
+  }
+  if (w1 < w2) return;
+  auto reverse_curve = [&] {
+    w1 = curve->ReversedParameter(w1);
+    w2 = curve->ReversedParameter(w2);
+    curve->Reverse();
+  };
+  if (curve->IsPeriodic()) {
+    ElCLib::AdjustPeriodic(first, last, eps, w1, w2);
+  } else if (curve->IsClosed()) {
+    if (std::abs(w2 - first) < eps) {
+      w2 = last;  // the end projected on the seam's first side
+    } else if (std::abs(w1 - last) < eps) {
+      w1 = first;
+    } else {
+      if (curve->Value(w1).Distance(curve->Value(first)) < preci) w1 = first;
+      if (curve->Value(w2).Distance(curve->Value(last)) < preci) w2 = last;
+      if (std::abs(w2 - w1) < eps) {
+        w1 = first;
+        w2 = last;
+      } else if (w1 > w2) {
+        std::swap(w1, w2);
+      }
+    }
+  } else if (curve->IsKind(STANDARD_TYPE(Geom_BSplineCurve))) {
+    Handle(Geom_BSplineCurve) spline = Handle(Geom_BSplineCurve)::DownCast(curve);
+    if (spline->StartPoint().Distance(spline->EndPoint()) <= preci) {
+      if (std::abs(w2 - first) < eps)
+        w2 = last;
+      else if (std::abs(w1 - last) < eps)
+        w1 = first;
+      else
+        std::swap(w1, w2);
+    } else if (w1 > w2) {
+      reverse_curve();
+    }
+    if (w1 == w2) {
+      w1 = first;
+      w2 = last;
+    }
+  } else {
+    if (w1 > w2) reverse_curve();
+    if (w1 == w2) {
+      w1 -= eps;
+      w2 += eps;
+    }
+  }
 }
 
 namespace {
@@ -242,7 +300,7 @@ TopoDS_Edge ItemBuilder::Edge(const Entity& ec) {
   double u1 = 0., u2 = 0.;
   sac.Project(curve, pnt1, preci, projected, u1, Standard_False);
   sac.Project(curve, pnt2, preci, projected, u2, Standard_False);
-  StepToTopoDS_GeometricTool::UpdateParam3d(curve, u1, u2, preci);
+  OrderEdgeParameters(curve, u1, u2, preci);
   GeomAdaptor_Curve adaptor(curve);
   const double d1 = adaptor.Value(u1).Distance(pv1);
   const double d2 = adaptor.Value(u2).Distance(pv2);

@@ -46,6 +46,14 @@ struct BrepItem {
   std::vector<uint64_t> elements;
 };
 
+/// Puts an edge's parameters on its 3D curve (the projections of its vertices) in increasing
+/// order as OCCT 7.6's STEP reader does (StepToTopoDS_GeometricTool::UpdateParam3d), without
+/// loading its toolkit: clamped to a bounded open curve's ends; on a periodic curve moved by
+/// periods; on a closed curve (or a B-spline whose ends meet within `preci`) an end taken on the
+/// wrong side of the seam moves to the other side, else the two are swapped; on any other curve
+/// a decreasing pair reverses the curve itself (shared: the caller's other edges see it).
+void OrderEdgeParameters(const Handle(Geom_Curve) & curve, double& w1, double& w2, double preci);
+
 /// Builds the raw shape of `item.id` (StepToTopoDS_Builder::Init). Throws Unsupported where
 /// OCCT's reader would drop a face, an edge or a wire, or builds something not reproduced here.
 void BuildItem(Geometry& geometry, BrepItem* item);

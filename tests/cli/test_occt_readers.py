@@ -1,0 +1,66 @@
+"""OCCT's STEP and IGES readers in the rdmesh CLI: not linked in, but loaded from the module
+rdmesh_occt_readers.so beside the binary when a file needs them (engine/src/model/occt_readers.h).
+"""
+
+import json
+import os
+import shutil
+import subprocess
+
+import pytest
+
+MODEL = "cq_red_cube_blue_cylinder.step"
+
+
+def _mesh(binary, model, out, env_extra=None):
+    env = dict(os.environ)
+    env.pop("RDMESH_STEP_READER", None)
+    env.update(env_extra or {})
+    return subprocess.run([str(binary), "mesh", str(model), "-o", str(out), "--json", "-q"],
+                          capture_output=True, text=True, timeout=300, env=env)
+
+
+def _last_json(stdout):
+    lines = [line for line in stdout.splitlines() if line.strip()]
+    return json.loads(lines[-1])
+
+
+def test_the_cli_does_not_load_occts_readers_at_start(cli):
+    needed = subprocess.run(["readelf", "-d", str(cli)], capture_output=True, text=True,
+                            check=True).stdout
+    for toolkit in ("TKSTEP", "TKXDESTEP", "TKIGES", "TKXDEIGES"):
+        assert f"lib{toolkit}.so" not in needed
+    assert (cli.parent / "rdmesh_occt_readers.so").is_file()
+
+
+def test_occts_step_reader_comes_from_the_module(cli, data_dir, tmp_path):
+    own = _mesh(cli, data_dir / MODEL, tmp_path / "own.msh")
+    occt = _mesh(cli, data_dir / MODEL, tmp_path / "occt.msh", {"RDMESH_STEP_READER": "occt"})
+    assert own.returncode == 0, own.stderr
+    assert occt.returncode == 0, occt.stderr
+    own_report, occt_report = _last_json(own.stdout), _last_json(occt.stdout)
+    assert own_report["reader"] == "rdmesh"
+    assert occt_report["reader"] == "occt"
+    assert "occt_transfer" in occt_report["load_stages"]
+    # The same B-rep either way (the bench's step_equivalence checks this file): the same mesh.
+    assert occt_report["triangles"] == own_report["triangles"] > 0
+
+
+def test_a_binary_without_its_module_says_so(cli, data_dir, tmp_path):
+    alone = tmp_path / "alone" / "rdmesh"
+    alone.parent.mkdir()
+    shutil.copy2(cli, alone)
+    # rdmesh's own reader needs no module.
+    assert _mesh(alone, data_dir / MODEL, tmp_path / "own.msh").returncode == 0
+    run = _mesh(alone, data_dir / MODEL, tmp_path / "occt.msh", {"RDMESH_STEP_READER": "occt"})
+    assert run.returncode == 3
+    assert "rdmesh_occt_readers.so" in run.stderr
+    assert _last_json(run.stdout)["error"]["code"] == "internal"
+
+
+@pytest.mark.skipif(not os.path.isfile("/usr/share/opencascade/data/iges/bearing.iges"),
+                    reason="OCCT's sample IGES files are not installed")
+def test_iges_through_the_module(cli, tmp_path):
+    run = _mesh(cli, "/usr/share/opencascade/data/iges/bearing.iges", tmp_path / "b.msh")
+    assert run.returncode == 0, run.stderr
+    assert _last_json(run.stdout)["triangles"] > 0
