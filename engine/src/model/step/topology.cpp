@@ -60,8 +60,6 @@
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Solid.hxx>
 #include <TopoDS_Vertex.hxx>
-#include <XSAlgo.hxx>
-#include <XSAlgo_AlgoContainer.hxx>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -144,6 +142,107 @@ void OrderEdgeParameters(const Handle(Geom_Curve) & curve, double& w1, double& w
       w2 += eps;
     }
   }
+}
+
+namespace {
+
+// An edge on the 3D curve of `edge` over its range, with new vertices at the curve's ends: the
+// scratch edge on which CheckPCurve below compares pcurves. Null when `edge` has no 3D curve.
+TopoDS_Edge EdgeOnItsCurve(const TopoDS_Edge& edge) {
+  Handle(Geom_Curve) curve;
+  double first = 0., last = 0.;
+  if (!ShapeAnalysis_Edge().Curve3d(edge, curve, first, last, Standard_False)) return TopoDS_Edge();
+  BRepBuilderAPI_MakeEdge make(curve, curve->Value(first), curve->Value(last), first, last);
+  ShapeBuild_Edge().SetRange3d(make, first, last);
+  return make.Edge();
+}
+
+}  // namespace
+
+bool CheckPCurve(const TopoDS_Edge& edge, const TopoDS_Face& face, double preci, bool seam) {
+  Handle(Geom2d_Curve) pcurve;
+  double w1 = 0., w2 = 0.;
+  ShapeAnalysis_Edge sae;
+  if (!sae.PCurve(edge, face, pcurve, w1, w2, Standard_False)) return false;
+
+  Handle(Geom_Surface) surface = BRep_Tool::Surface(face);
+  double u_first, u_last, v_first, v_last;
+  surface->Bounds(u_first, u_last, v_first, v_last);
+  const gp_Pnt2d uv1 = pcurve->Value(w1);
+  const gp_Pnt2d uv2 = pcurve->Value(w2);
+  // Several periods (an angle in degrees read as radians): divided before subtracting, so that
+  // infinite bounds stay comparable.
+  const double du = std::abs(uv1.X() - uv2.X());
+  const double dv = std::abs(uv1.Y() - uv2.Y());
+  if (du / 8. > (u_last / 6. - u_first / 6.) || dv / 8. > (v_last / 6. - v_first / 6.)) {
+    ShapeBuild_Edge().RemovePCurve(edge, face);
+    return false;
+  }
+
+  Handle(Geom_Curve) curve;
+  double c_first = 0., c_last = 0.;
+  sae.Curve3d(edge, curve, c_first, c_last, Standard_False);
+  const TopoDS_Vertex v1 = TopExp::FirstVertex(edge);
+  const TopoDS_Vertex v2 = TopExp::LastVertex(edge);
+  const gp_Pnt end1 = curve.IsNull() ? BRep_Tool::Pnt(v1) : curve->Value(c_first);
+  const gp_Pnt end2 = curve.IsNull() ? BRep_Tool::Pnt(v2) : curve->Value(c_last);
+  if (!(end1.Distance(surface->Value(uv1.X(), uv1.Y())) <= preci &&
+        end2.Distance(surface->Value(uv2.X(), uv2.Y())) <= preci)) {
+    ShapeBuild_Edge().RemovePCurve(edge, face);
+    return false;
+  }
+  if (curve.IsNull()) return false;
+
+  BRep_Builder builder;
+  TopoDS_Edge scratch = EdgeOnItsCurve(edge);
+  Handle(Geom2d_Curve) other;  // a seam's second pcurve
+  if (seam) {
+    double f, l;
+    if (!sae.PCurve(TopoDS::Edge(edge.Reversed()), face, other, f, l, Standard_False) ||
+        other == pcurve)
+      other = Handle(Geom2d_Curve)::DownCast(pcurve->Copy());
+    builder.UpdateEdge(scratch, pcurve, other, face, 0.);
+  } else {
+    builder.UpdateEdge(scratch, pcurve, face, 0.);
+  }
+  builder.Range(scratch, face, w1, w2);
+  builder.SameRange(scratch, Standard_False);
+  // XSAlgo's read.stdsameparameter.mode is 0: the scratch edge keeps its same-parameter flag.
+  Handle(ShapeFix_Edge) fix = new ShapeFix_Edge;
+  fix->FixSameParameter(scratch);
+  double tolerance = BRep_Tool::Tolerance(scratch);
+  bool same_range = BRep_Tool::SameRange(scratch);
+  bool same_parameter = BRep_Tool::SameParameter(scratch);
+  if (tolerance > std::min(1., 2. * preci) || !same_range) {
+    TopoDS_Edge projected = EdgeOnItsCurve(edge);
+    fix->FixAddPCurve(projected, face, seam, preci);
+    fix->FixSameParameter(projected);
+    const double projected_tolerance = BRep_Tool::Tolerance(projected);
+    if (projected_tolerance < tolerance || !same_range) {
+      same_range = BRep_Tool::SameRange(projected);
+      same_parameter = BRep_Tool::SameParameter(projected);
+      tolerance = projected_tolerance;
+      scratch = projected;
+    }
+  }
+
+  sae.PCurve(scratch, face, pcurve, w1, w2, Standard_False);
+  if (seam) {
+    double f, l;
+    sae.PCurve(TopoDS::Edge(scratch.Reversed()), face, other, f, l, Standard_False);
+    if (edge.Orientation() == TopAbs_REVERSED)
+      builder.UpdateEdge(edge, other, pcurve, face, tolerance);
+    else
+      builder.UpdateEdge(edge, pcurve, other, face, tolerance);
+  } else {
+    builder.UpdateEdge(edge, pcurve, face, tolerance);
+  }
+  builder.UpdateVertex(v1, tolerance);
+  builder.UpdateVertex(v2, tolerance);
+  builder.Range(edge, face, w1, w2);
+  if (BRep_Tool::SameRange(edge)) builder.SameRange(edge, same_range);
+  if (BRep_Tool::SameParameter(edge)) builder.SameParameter(edge, same_parameter);
+  return true;
 }
 
 namespace {
@@ -417,7 +516,7 @@ void CheckPCurves(const TopoDS_Wire& wire, const TopoDS_Face& face, bool is_plan
       ElCLib::AdjustPeriodic(u1, u2, Min(Abs(w2 - w1) / 2, Precision::PConfusion()), w1, w2);
       builder.Range(edge, face, w1, w2);
     }
-    XSAlgo::AlgoContainer()->CheckPCurve(edge, face, preci, data->IsSeam(i));
+    CheckPCurve(edge, face, preci, data->IsSeam(i));
   }
 }
 
@@ -862,7 +961,7 @@ void BuildItem(Geometry& geometry, BrepItem* item) {
 void PrepareOcct() {
   static std::once_flag once;
   std::call_once(once, [] {
-    XSAlgo::Init();  // the algorithm containers (ShapeAlgo's too) and the exchange settings
+    ShapeAlgo::Init();  // the algorithm container and Shape Healing's messages
     ShapeBuild::PlaneXOY();
     BRepLib::Plane();
   });

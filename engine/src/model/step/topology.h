@@ -6,6 +6,7 @@
 // them, the same wire and face orientations. Then each item is healed with the ShapeFix calls
 // and settings of OCCT's reader (XSAlgo_AlgoContainer::ProcessShape without a resource file).
 #include <TopTools_DataMapOfShapeShape.hxx>
+#include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
 #include <TopoDS_Wire.hxx>
@@ -53,6 +54,14 @@ struct BrepItem {
 /// wrong side of the seam moves to the other side, else the two are swapped; on any other curve
 /// a decreasing pair reverses the curve itself (shared: the caller's other edges see it).
 void OrderEdgeParameters(const Handle(Geom_Curve) & curve, double& w1, double& w2, double preci);
+
+/// OCCT 7.6's check of a pcurve read from the file (XSAlgo_AlgoContainer::CheckPCurve under
+/// XSAlgo's defaults), without loading TKXSBase: removes a pcurve that spans several periods of
+/// the surface or whose ends miss the edge's by more than `preci`; otherwise makes it
+/// same-parameter on a scratch edge, lets a projection of the 3D curve replace it where that
+/// gives a lower tolerance, and puts the result back on `edge`. `seam`: the edge is a seam of
+/// `face`. False when it removed the pcurve or there was none (or no 3D curve) to check.
+bool CheckPCurve(const TopoDS_Edge& edge, const TopoDS_Face& face, double preci, bool seam);
 
 /// Builds the raw shape of `item.id` (StepToTopoDS_Builder::Init). Throws Unsupported where
 /// OCCT's reader would drop a face, an edge or a wire, or builds something not reproduced here.
