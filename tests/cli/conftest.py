@@ -109,9 +109,12 @@ def meshbench(shared_dir):
     assert built.returncode == 0, built.stderr
     yardstick = pathlib.Path(built.stdout.strip().splitlines()[-1])
 
-    def evaluate(model, mesh):
+    def evaluate(model, mesh, both_ways=False):
+        # both_ways: also from points of each face to the mesh (surface_to_mesh_rel,
+        # hausdorff_sym_rel).
+        env = dict(os.environ, MESHBENCH_BOTH_WAYS="1" if both_ways else "0")
         completed = subprocess.run([str(yardstick / "meshbench"), "eval", str(model), str(mesh)],
-                                   capture_output=True, text=True, timeout=600)
+                                   capture_output=True, text=True, timeout=600, env=env)
         assert completed.returncode == 0, completed.stderr
         return json.loads(completed.stdout.strip().splitlines()[-1])
 

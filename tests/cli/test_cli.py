@@ -377,14 +377,17 @@ def test_msh_parametric_round_trips_the_parameters(run, data_dir, tmp_path):
         map(tuple, mesh.points.tolist()))
 
 
-@pytest.mark.parametrize("name,tol,bound", [("gmsh_periodic_u_cst.step", "1e-4", 1.05),
-                                            ("gmsh_periodic_u_cst.step", "3e-4", 1.05),
-                                            ("gmsh_angled.step", "3e-3", 1.05),
-                                            ("gmsh_solid_56.step", "1e-4", 1.05),
-                                            ("gmsh_wrenchnut.stp", "3e-4", 1.0),
-                                            ("gmsh_wrenchnut.stp", "1e-4", 1.0)])
+@pytest.mark.parametrize("name,tol,bound,both_ways",
+                         [("gmsh_periodic_u_cst.step", "1e-4", 1.05, False),
+                          ("gmsh_periodic_u_cst.step", "3e-4", 1.05, False),
+                          ("gmsh_angled.step", "3e-3", 1.05, False),
+                          ("gmsh_solid_56.step", "1e-4", 1.05, False),
+                          ("gmsh_wrenchnut.stp", "3e-4", 1.0, False),
+                          ("gmsh_wrenchnut.stp", "1e-4", 1.0, False),
+                          ("gmsh_wrenchnut.stp", "1e-3", 1.05, True),
+                          ("gmsh_periodic_u_cst.step", "1e-3", 1.05, True)])
 def test_delivered_deviation_meets_the_request(run, shared_dir, tmp_path, meshbench, name, tol,
-                                               bound):
+                                               bound, both_ways):
     """Cases that missed the request, each met now, by the engine's estimate and by the yardstick.
     gmsh_periodic_u_cst at 1e-4 (3.0x): the fold guard blocked the splits; a face still over the
     criteria is refined again from its own result. At 3e-4 (5.85x): a fan of slivers standing on
@@ -402,7 +405,13 @@ def test_delivered_deviation_meets_the_request(run, shared_dir, tmp_path, meshbe
     triangles tilted over an uneven B-spline parametrisation, where the sampled estimate reads
     short; the final check measures each estimated triangle again as the distance to the nearest
     surface point (DenseDeviation) and splits the ones over, which gives 0.997x and 0.998x, so
-    these are held to the request itself. Skipped only without the shared corpus."""
+    these are held to the request itself. Both ways (the yardstick also measures from points of
+    each face to the mesh): gmsh_wrenchnut at 1e-3 read 1.104x that way, a fan of slivers at a
+    corner of B-spline face 6 where the surface bends away between the final check's samples (now
+    split where a sample's reading plus the cell's sag passes the request) and where bisecting
+    the sliver's long edge never reached it (now split at the point); gmsh_periodic_u_cst read
+    1.062x before the final check looked from the surface side. Skipped only without the shared
+    corpus."""
     model = shared_dir / "corpus" / name
     if not model.exists():
         pytest.skip(f"{model} is not there (the shared corpus)")
@@ -413,9 +422,30 @@ def test_delivered_deviation_meets_the_request(run, shared_dir, tmp_path, meshbe
     assert all(f["reason"] == "" for f in report["faces"])
     assert report["faces_over_criteria"] == 0
     assert report["estimated_deviation"] <= report["requested_deviation"]
-    score = meshbench(model, output)
-    assert score["hausdorff_rel"] <= bound * float(tol)
+    score = meshbench(model, output, both_ways=both_ways)
+    assert score["hausdorff_sym_rel" if both_ways else "hausdorff_rel"] <= bound * float(tol)
     assert score["free_edges"] == 0 and score["inverted"] == 0
+
+
+def test_face_whose_trim_lies_off_its_edges_says_so(run, shared_dir, tmp_path, meshbench):
+    """brepnet_132907 at 1e-4 of the diagonal (2.2e-3 mm): the pcurves of torus face 77 lie up to
+    7.1e-3 mm from their edges' 3D curves, within the edges' tolerance. The mesh follows the 3D
+    curves (shared with the neighbours), so seen from the face it misses by that much along the
+    boundary (the yardstick read 3.08x both ways, and nothing was reported). The face says why,
+    and the estimate covers what the yardstick reads. Skipped only without the shared corpus."""
+    model = shared_dir / "corpus" / "brepnet_132907_4ed3eae8_0.stp"
+    if not model.exists():
+        pytest.skip(f"{model} is not there (the shared corpus)")
+    output = tmp_path / "out.msh"
+    result = run("mesh", model, "-o", output, "--json", "--max-deviation-rel", "1e-4")
+    assert result.code == 0, result.stderr
+    face = next(f for f in result.json["faces"] if f["id"] == 77)
+    assert face["reason"].startswith("the B-rep prevents the requested deviation"), face
+    assert face["deviation"] > result.json["requested_deviation"]
+    score = meshbench(model, output, both_ways=True)
+    assert score["hausdorff_sym_rel"] > 1.05e-4  # the miss is real
+    diagonal = result.json["requested_deviation"] / 1e-4
+    assert score["hausdorff_sym_rel"] * diagonal <= result.json["estimated_deviation"]
 
 
 def test_face_the_brep_keeps_from_the_request_says_so(run, shared_dir, tmp_path):

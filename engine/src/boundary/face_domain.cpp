@@ -1,8 +1,10 @@
 #include "boundary/face_domain.h"
 
+#include <BRepAdaptor_Curve.hxx>
 #include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
 #include <Standard_Failure.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
 #include <algorithm>
@@ -532,6 +534,36 @@ double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain)
     if (in.x == q.x && in.y == q.y) continue;
     const gp_Pnt s = surface.Value(in.x, in.y);
     gap = std::max(gap, Dist(domain.xyz[i], Vec3{s.X(), s.Y(), s.Z()}));
+  }
+  return gap;
+}
+
+double EdgeTrimGap(const TopoDS_Face& face, double above) {
+  constexpr int kSamples = 32;       // points of the pcurve's image per edge
+  constexpr int kCurvePoints = 128;  // the 3D curve's polyline they are measured to
+  double gap = 0;
+  for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+    const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+    if (BRep_Tool::Degenerated(edge) || !(BRep_Tool::Tolerance(edge) > above)) continue;
+    try {
+      const BRepAdaptor_Curve curve(edge), on_face(edge, face);
+      const double a = curve.FirstParameter(), b = curve.LastParameter();
+      std::vector<Vec3> line(kCurvePoints + 1);
+      for (int k = 0; k <= kCurvePoints; ++k) {
+        const gp_Pnt p = curve.Value(a + (b - a) * k / kCurvePoints);
+        line[k] = {p.X(), p.Y(), p.Z()};
+      }
+      for (int k = 0; k <= kSamples; ++k) {
+        const gp_Pnt p = on_face.Value(a + (b - a) * k / kSamples);
+        const Vec3 x{p.X(), p.Y(), p.Z()};
+        double d = HUGE_VAL;
+        for (int j = 0; j < kCurvePoints; ++j)
+          d = std::min(d, PointSegmentDistance(x, line[j], line[j + 1]));
+        gap = std::max(gap, d);
+      }
+    } catch (const Standard_Failure&) {
+      continue;  // an edge without a 3D curve or a pcurve: the domain reports it
+    }
   }
   return gap;
 }

@@ -64,6 +64,13 @@ double BoundaryGap(const FaceDomain& domain, Surface& surface);
 /// range. `domain` in the face's own (u,v) (not its B-spline conversion's).
 double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain);
 
+/// How far the face's trim (its pcurves on the surface) lies from its edges' 3D curves, which
+/// the mesh's boundary follows (they are shared with the neighbours): the largest distance from
+/// a point of a pcurve's image to the 3D curve, at 33 points of each edge whose tolerance is
+/// above `above` (the others' curves agree within it). Seen from the surface, the mesh misses the
+/// face by this much along its boundary.
+double EdgeTrimGap(const TopoDS_Face& face, double above);
+
 /// How far the chords of the domain's edge segments (not bridges) lie off the surface at their
 /// middles, along the normal: the largest |(S(mid uv) - mid xyz) . N(mid uv)|. Face refinement
 /// cannot change them; the edge grids set them (and keep them no finer than the edge tolerance).

@@ -367,7 +367,7 @@ class FaceRun {
       int edges = 0;
       for (int i = 0; i < 3; ++i) edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
       double d = DenseDeviation(*base_, uv, near, edges, limit, &where);
-      d = std::max(d, SurfaceSideDeviation(*base_, uv, where, edges, near, count, &where));
+      d = std::max(d, SurfaceSideDeviation(*base_, uv, where, edges, near, count, limit, &where));
       deviation[t] = d, worst = std::max(worst, d);
       if (worst > limit) {
         char text[160];
@@ -431,15 +431,19 @@ class FaceRun {
 
   // Why a meshed face may miss the request: the B-rep itself keeps it from the requested
   // deviation where its edges lie off the surface by more (BoundaryGap, or past the surface's own
-  // range: BoundaryGapPastSurface), or where its edges' tolerance is coarser and the face misses
-  // it or its edges' chords do (edge grids are not refined below an edge's tolerance:
-  // edge_grids.cpp); else the triangle cap, or triangles no split could bring within criteria.
+  // range: BoundaryGapPastSurface, or from the face's trim: EdgeTrimGap), or where its edges'
+  // tolerance is coarser and the face misses it or its edges' chords do (edge grids are not
+  // refined below an edge's tolerance: edge_grids.cpp); else the triangle cap, or triangles no
+  // split could bring within criteria.
   void ExplainShortfall() {
     const double deviation = job_.criteria.max_deviation;
     Surface& surface = base_ ? *base_ : *surface_;
     double gap = deviation > 0 ? BoundaryGap(domain_, surface) : 0;
     if (deviation > 0 && !job_.nurbs) gap = std::max(gap, BoundaryGapPastSurface(face_, domain_));
     const double tolerance = deviation > 0 ? EdgeTolerance(face_) : 0;
+    // Seen from the surface, the mesh's boundary (the edges' 3D curves) misses the face's trim
+    // (the pcurves) by as much as they lie apart, which the edge tolerance allows.
+    if (tolerance > deviation) gap = std::max(gap, EdgeTrimGap(face_, deviation));
     const bool missed = stats_.max_violation > 1.0 + 1e-9;
     const bool coarse =
         tolerance > deviation && (missed || BoundaryChordHeight(domain_, surface) > deviation);

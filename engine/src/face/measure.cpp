@@ -538,32 +538,99 @@ double DenseDeviation(Surface& s, const Vec2 uv[3], const Vec3 p[3], int edges, 
 }
 
 double SurfaceSideDeviation(Surface& s, const Vec2 uv[3], Vec2 extra, int edges, const Vec3* near,
-                            int count, Vec2* where) {
+                            int count, double limit, Vec2* where) {
   constexpr int kN = 8;
+  constexpr int kMaxDepth = 3;      // sub-triangles down to 1/64 of a grid cell
+  constexpr int kMaxSamples = 400;  // a bound on the cost per triangle
   double best = 0;
-  auto sample = [&](Vec2 q) {
-    const Vec3 x = s.Point(q.x, q.y);
+  int samples = 0;
+  // A sample of barycentric (b1, b2): its point and its distance to the nearest triangle. Points
+  // on a skipped edge read 0: the chord or the B-rep's edge holds them.
+  struct Sample {
+    double b1, b2;
+    Vec3 x;
+    double d;
+  };
+  auto on_skipped_edge = [&](double b1, double b2) {
+    return (b1 == 0 && !(edges & 2)) || (b2 == 0 && !(edges & 4)) ||
+           (std::fabs(b1 + b2 - 1) < 1e-12 && !(edges & 1));
+  };
+  auto sample = [&](double b1, double b2) {
+    const Vec2 q = (1 - b1 - b2) * uv[0] + (b1 * uv[1] + b2 * uv[2]);
+    Sample r{b1, b2, s.Point(q.x, q.y), 0};
+    const bool corner = (b1 == 0 && b2 == 0) || b1 == 1 || b2 == 1;
+    if (corner || on_skipped_edge(b1, b2)) return r;  // the corners lie on the surface
+    ++samples;
     double d = HUGE_VAL;
-    for (int k = 0; k < count && d > best; ++k)
-      d = std::min(d, PointTriangleDistance(x, near[3 * k], near[3 * k + 1], near[3 * k + 2]));
+    for (int k = 0; k < count; ++k)
+      d = std::min(d, PointTriangleDistance(r.x, near[3 * k], near[3 * k + 1], near[3 * k + 2]));
+    r.d = d;
     if (d > best) best = d, *where = q;
+    return r;
   };
   // Grid node (i, j) has weights (1 - b1 - b2, b1, b2): edge 0 is i + j = kN, edge 1 is i = 0,
   // edge 2 is j = 0.
-  for (int i = 0; i <= kN; ++i) {
-    for (int j = 0; i + j <= kN; ++j) {
-      if (i == kN || j == kN || i + j == 0) continue;  // the corners lie on the surface
-      if ((i + j == kN && !(edges & 1)) || (i == 0 && !(edges & 2)) || (j == 0 && !(edges & 4)))
-        continue;
-      const double b1 = double(i) / kN, b2 = double(j) / kN;
-      sample((1 - b1 - b2) * uv[0] + (b1 * uv[1] + b2 * uv[2]));
+  Sample grid[kN + 1][kN + 1];
+  for (int i = 0; i <= kN; ++i)
+    for (int j = 0; i + j <= kN; ++j) grid[i][j] = sample(double(i) / kN, double(j) / kN);
+  // A cell's points lie within its sag of the plane of its corners, and the distance to the mesh
+  // is 1-Lipschitz: where the corners' largest reading plus the sag passes the limit, the cell is
+  // split in four and read again (a sliver's grid can step over a bulge beside its corner).
+  auto sag_of = [](const Sample& a, const Sample& b, const Sample& m) {
+    return Dist(m.x, 0.5 * (a.x + b.x));
+  };
+  auto refine = [&](auto&& self, const Sample& a, const Sample& b, const Sample& c, double sag,
+                    int depth) -> void {
+    if (depth > kMaxDepth || samples >= kMaxSamples) return;
+    if (!(std::max({a.d, b.d, c.d}) + sag > limit)) return;
+    const Sample ab = sample(0.5 * (a.b1 + b.b1), 0.5 * (a.b2 + b.b2));
+    const Sample bc = sample(0.5 * (b.b1 + c.b1), 0.5 * (b.b2 + c.b2));
+    const Sample ca = sample(0.5 * (c.b1 + a.b1), 0.5 * (c.b2 + a.b2));
+    // The children's sag: a quarter of the largest measured at this level's midpoints.
+    const double child = 0.25 * std::max({sag_of(a, b, ab), sag_of(b, c, bc), sag_of(c, a, ca)});
+    self(self, a, ab, ca, child, depth + 1);
+    self(self, ab, b, bc, child, depth + 1);
+    self(self, ca, bc, c, child, depth + 1);
+    self(self, ab, bc, ca, child, depth + 1);
+  };
+  if (limit > 0) {
+    // A cell's sag from the grid's second differences through its corners (a chord of one step
+    // bows by an eighth of the second difference).
+    auto second = [&](int i, int j) {
+      double m = 0;
+      if (i > 0 && i + j < kN)
+        m = std::max(m, Dist(grid[i - 1][j].x + grid[i + 1][j].x, 2 * grid[i][j].x));
+      if (j > 0 && i + j < kN)
+        m = std::max(m, Dist(grid[i][j - 1].x + grid[i][j + 1].x, 2 * grid[i][j].x));
+      if (i > 0 && j > 0 && i + j <= kN)
+        m = std::max(m, Dist(grid[i - 1][j + 1].x + grid[i + 1][j - 1].x, 2 * grid[i][j].x));
+      return m / 8;
+    };
+    double bend[kN + 1][kN + 1];
+    for (int i = 0; i <= kN; ++i)
+      for (int j = 0; i + j <= kN; ++j) bend[i][j] = second(i, j);
+    for (int i = 0; i < kN; ++i) {
+      for (int j = 0; i + j < kN; ++j) {
+        const double up = std::max({bend[i][j], bend[i + 1][j], bend[i][j + 1]});
+        refine(refine, grid[i][j], grid[i + 1][j], grid[i][j + 1], up, 0);
+        if (i + j + 2 <= kN) {
+          const double down = std::max({bend[i + 1][j], bend[i][j + 1], bend[i + 1][j + 1]});
+          refine(refine, grid[i + 1][j], grid[i + 1][j + 1], grid[i][j + 1], down, 0);
+        }
+      }
     }
   }
-  sample((1.0 / 3) * (uv[0] + uv[1] + uv[2]));
+  sample(1.0 / 3, 1.0 / 3);
   const double area = Orient(uv[0], uv[1], uv[2]);
   if (area > 0) {
     const double w0 = Orient(extra, uv[1], uv[2]) / area, w1 = Orient(uv[0], extra, uv[2]) / area;
-    if (w0 > 1e-9 && w1 > 1e-9 && 1 - w0 - w1 > 1e-9) sample(extra);
+    if (w0 > 1e-9 && w1 > 1e-9 && 1 - w0 - w1 > 1e-9) {
+      double d = HUGE_VAL;
+      const Vec3 x = s.Point(extra.x, extra.y);
+      for (int k = 0; k < count; ++k)
+        d = std::min(d, PointTriangleDistance(x, near[3 * k], near[3 * k + 1], near[3 * k + 2]));
+      if (d > best) best = d, *where = extra;
+    }
   }
   return best;
 }

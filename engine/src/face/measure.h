@@ -89,14 +89,17 @@ double DenseDeviation(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], int
 /// DenseDeviation (the yardstick measures both): S at the (u,v) of every node of the barycentric
 /// grid of step 1/8 but the corners, and at `extra` (a peak the estimate found) when it lies
 /// strictly inside, each to the nearest of the `count` triangles whose corners are
-/// near[3k..3k+2] (the triangle and its neighbours). Points of edge i (opposite corner i) only
-/// when bit i of `edges` is set: an edge grid's chord holds its own deviation, and S at a
-/// boundary node's (u,v) lies off the edge where the B-rep's edge lies off its surface. A surface
-/// that bends away beside a tilted triangle's plane lies farther from the triangle than above its
-/// plane, which is what the estimate measures. Returns the largest, its (u,v) into *where. Costs
-/// up to 45 surface points.
+/// near[3k..3k+2] (the triangle and its neighbours). A grid cell whose corners' largest reading
+/// plus its sag (from the grid's second differences, then from its edges' midpoints) passes
+/// `limit` is split in four and read again, down to 1/64 of a cell: a sliver's grid can step over
+/// a bulge beside its corner. Points of edge i (opposite corner i) only when bit i of `edges` is
+/// set: an edge grid's chord holds its own deviation, and S at a boundary node's (u,v) lies off
+/// the edge where the B-rep's edge lies off its surface. A surface that bends away beside a
+/// tilted triangle's plane lies farther from the triangle than above its plane, which is what the
+/// estimate measures. Returns the largest, its (u,v) into *where. Costs 45 surface points, and
+/// at most 400 more where cells are split.
 double SurfaceSideDeviation(Surface& surface, const Vec2 uv[3], Vec2 extra, int edges,
-                            const Vec3* near, int count, Vec2* where);
+                            const Vec3* near, int count, double limit, Vec2* where);
 
 /// Sum of the 3D areas of the three triangles a split at q makes, over the triangle's area.
 double SplitAreaRatio(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3], Vec2 q);

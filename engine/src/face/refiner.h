@@ -125,7 +125,8 @@ class Refiner {
   bool SplitSliver(int t, const Vec3 p[3], SplitMode mode);
   bool SplitAtAreaOptimum(int t, const Vec2 uv[3], const Vec3 p[3], SplitMode mode);
   bool SplitAnyEdge(int t, const Vec3 p[3], SplitMode mode);
-  bool SplitEdge(int t, int i, SplitMode mode);
+  bool SplitEdge(int t, int i, SplitMode mode, double at = -1);
+  bool SplitAtPoint(int t, Vec2 q);
   bool RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* tris, Candidate* cand);
   bool ReshapeByFlip(int t);
   bool TryFlip(int t, int i, Phase phase);

@@ -103,8 +103,8 @@ Status Refiner::Verify(int64_t max_triangles) {
       TriangleMeasure& m = measure_[t];
       if (!mesh_.alive[t] || m.exact || checked[t] == stamp_[t] + 1u) continue;
       checked[t] = stamp_[t] + 1u;
-      if (m.violation > 1 || (criteria_.min_length > 0 && m.max_length < 2 * criteria_.min_length))
-        continue;  // refinement left it (reported), or it is too small to split
+      if (criteria_.min_length > 0 && m.max_length < 2 * criteria_.min_length)
+        continue;  // too small to split
       Vec2 uv[3], uv_scratch[3];
       Vec3 p[3];
       mesh_.MeasureCorners(t, uv, p);
@@ -115,11 +115,17 @@ Status Refiner::Verify(int64_t max_triangles) {
       for (int i = 0; i < 3; ++i) edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
       Vec2 where;
       double dense = DenseDeviation(surface_, uv, p, edges, limit, &where);
+      if (m.violation > 1) {
+        // Refinement left it over its estimate, an upper bound: the dense reading stands where
+        // it is within (a sliver's estimate can read over what the surface is).
+        if (!(dense <= limit)) continue;  // reported
+        m.deviation = dense, m.worst_uv = where, m.violation = dense / limit;
+      }
       if (!(dense > limit)) {
         // The other way round: the surface over the triangle to it or a neighbour.
         Vec3 near[12];
         const int count = mesh_.CornersWithNeighbours(t, near);
-        dense = SurfaceSideDeviation(surface_, uv, m.worst_uv, edges, near, count, &where);
+        dense = SurfaceSideDeviation(surface_, uv, m.worst_uv, edges, near, count, limit, &where);
         if (!(dense > limit)) continue;
         // Over: the nearest triangle may lie one ring further (thin triangles around a corner).
         // Again against every triangle at the corners, which only lowers the reading.
@@ -131,7 +137,7 @@ Status Refiner::Verify(int64_t max_triangles) {
             mesh_.MeasureCorners(w, uv_scratch, &ring[ring.size() - 3]);
           }
         dense = SurfaceSideDeviation(surface_, uv, m.worst_uv, edges, ring.data(),
-                                     static_cast<int>(ring.size() / 3), &where);
+                                     static_cast<int>(ring.size() / 3), limit, &where);
         if (!(dense > limit)) continue;
         if (round == kVerifyRounds) continue;  // no split follows
         side.push_back({t, stamp_[t], m});
@@ -142,6 +148,12 @@ Status Refiner::Verify(int64_t max_triangles) {
     }
     // The last round only checks (what it finds over stays so, and the face reports it).
     if (over == 0 || round == kVerifyRounds) break;
+    // A surface-side reading is split where the surface is farthest from the mesh: a sliver's
+    // own splits bisect its long edge, away from a bulge beside its corner.
+    for (const SideReading& r : side)
+      if (mesh_.alive[r.t] && stamp_[r.t] == r.stamp && mesh_.TriangleCount() < max_triangles &&
+          SplitAtPoint(r.t, measure_[r.t].worst_uv))
+        ++stats_.splits;
     Status st = SplitViolating(max_triangles);
     if (!st.ok()) return st;
     for (const SideReading& r : side)
@@ -307,14 +319,51 @@ bool Refiner::SplitAnyEdge(int t, const Vec3 p[3], SplitMode mode) {
   return false;
 }
 
-bool Refiner::SplitEdge(int t, int i, SplitMode mode) {
+// A split at (u,v) q inside t: a node there, or on the edge q lies beside (at its foot).
+bool Refiner::SplitAtPoint(int t, Vec2 q) {
+  Vec2 uv[3];
+  Vec3 p[3];
+  mesh_.MeasureCorners(t, uv, p);
+  const double det = Orient(uv[0], uv[1], uv[2]);
+  if (!(det > 0)) return false;
+  const double w[3] = {Orient(q, uv[1], uv[2]) / det, Orient(uv[0], q, uv[2]) / det,
+                       Orient(uv[0], uv[1], q) / det};
+  const int k = static_cast<int>(std::min_element(w, w + 3) - w);
+  if (w[k] < -1e-9) return false;
+  if (w[k] < kMinWeight) {
+    // Edge k runs from corner k + 1 to corner k + 2; the foot's share along it.
+    const double a = std::max(w[(k + 1) % 3], 0.0), b = std::max(w[(k + 2) % 3], 0.0);
+    const double s = std::clamp(b / (a + b), kMinWeight, 1 - kMinWeight);
+    if (mesh_.kind[t][k] == EdgeKind::kFixed) return false;
+    // Nearer the middle where the foot's split folds a child (a thin one at the corner).
+    for (double f : {1.0, 0.75, 0.5, 0.25}) {
+      if (SplitEdge(t, k, SplitMode{true, false}, 0.5 + f * (s - 0.5))) return true;
+    }
+    return false;
+  }
+  const int node = NewNode(q);
+  std::vector<int> cavity = {t};
+  std::vector<Tri> tris = SplitTriangleTris(mesh_, t, node);
+  Candidate cand = Evaluate(tris);
+  if (!SplitOk(cand.min_agreement, cavity) && !RescueSplit(node, &cavity, &tris, &cand)) {
+    DropLastNode();
+    return false;
+  }
+  Apply(cavity, tris, cand, Phase::kRefine);
+  Legalize(node);
+  return true;
+}
+
+bool Refiner::SplitEdge(int t, int i, SplitMode mode, double at) {
   const int b = mesh_.tri[t][(i + 1) % 3], c = mesh_.tri[t][(i + 2) % 3];
   const bool pole = mesh_.kind[t][i] == EdgeKind::kSplittable;
   std::vector<int> cavity;
   std::vector<Tri> tris;
   auto place = [&](double s) { return (1 - s) * mesh_.uv[b] + s * mesh_.uv[c]; };
   double s_best = 0.5;
-  if (!pole) {
+  if (at >= 0) {
+    s_best = at;
+  } else if (!pole) {
     // The paper's Algorithm 2: the point on the edge that maximises the area of the new
     // triangles.
     SplitEdgeTris(mesh_, t, i, -1, &cavity, &tris);

@@ -209,16 +209,16 @@ TEST(MeasureTest, SurfaceSideSeesTheSurfaceOverTheTriangle) {
   for (int i = 0; i < 3; ++i) p[i] = cylinder->Point(uv[i].x, uv[i].y);
   Vec2 where;
   const double sagitta = 1 - std::cos(0.25);
-  const double d = SurfaceSideDeviation(*cylinder, uv, uv[0], 7, p, 1, &where);
+  const double d = SurfaceSideDeviation(*cylinder, uv, uv[0], 7, p, 1, 0.0, &where);
   EXPECT_GT(d, 0.9 * sagitta);
   EXPECT_LE(d, sagitta * (1 + 1e-9));
   // A neighbour nearer to some of the surface points can only lower it.
   Vec3 both[6] = {p[0], p[1], p[2], p[0], p[2], cylinder->Point(0, 1)};
-  EXPECT_LE(SurfaceSideDeviation(*cylinder, uv, uv[0], 7, both, 2, &where), d);
+  EXPECT_LE(SurfaceSideDeviation(*cylinder, uv, uv[0], 7, both, 2, 0.0, &where), d);
   // On a plane the surface is the triangle.
   auto plane = MakePlaneSurface();
   for (int i = 0; i < 3; ++i) p[i] = plane->Point(uv[i].x, uv[i].y);
-  EXPECT_NEAR(SurfaceSideDeviation(*plane, uv, uv[0], 7, p, 1, &where), 0, 1e-15);
+  EXPECT_NEAR(SurfaceSideDeviation(*plane, uv, uv[0], 7, p, 1, 0.0, &where), 0, 1e-15);
 }
 
 TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
