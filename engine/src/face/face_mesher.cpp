@@ -271,7 +271,7 @@ class FaceRun {
                                          &start);
       if (status_.ok()) {
         UnfoldInitialMesh(&start, *surface_, domain_.scale_u, domain_.scale_v);
-        KeepIfBetter(&start, 0, job_.max_triangles, false);
+        KeepIfBetter(&start, 0, RetryCap(), false);
       } else if (!Stopping()) {
         status_ = Status::Ok();  // the triangulation that worked before stands
       }
@@ -280,7 +280,7 @@ class FaceRun {
     // children (kFoldingGenerations), which frees splits that the fold guard blocked.
     for (int round = 0; round < kStuckRetries && Stuck(); ++round) {
       WorkMesh again = mesh_;
-      if (!KeepIfBetter(&again, 0, job_.max_triangles, false)) break;
+      if (!KeepIfBetter(&again, 0, RetryCap(), false)) break;
     }
     if (!status_.ok()) {
       f_.status = FaceStatus::kSkipped;
@@ -469,6 +469,13 @@ class FaceRun {
   bool Fail(const std::string& reason) {
     f_ = Failed(std::move(f_), reason);
     return false;
+  }
+  // A retry of a stuck face may take this many times the triangles it has (a face whose normal
+  // flips inside, SSO-8's twisted B-spline patches, issue 35, refined again from itself toward
+  // the 20 M cap for minutes); one that reaches the cap is not kept (KeepIfBetter).
+  int64_t RetryCap() const {
+    return std::min<int64_t>(job_.max_triangles,
+                             kRetryCap * std::max<int64_t>(mesh_.TriangleCount(), kRetryMin));
   }
   // Refinement ended within its budget but over the criteria.
   bool Stuck() const {

@@ -54,6 +54,11 @@ constexpr int kStuckRetries = 2;
 // unfolded start's splits made (at least kFoldedStartMin).
 constexpr int64_t kFoldedStartCap = 4;
 constexpr int64_t kFoldedStartMin = 100;
+// The other retries of a face still over its criteria (a first triangulation that follows the
+// surface's turn, a refinement from its own result) stop at this many times its triangles (at
+// least kRetryMin): past that they only chase a fold no split removes.
+constexpr int64_t kRetryCap = 4;
+constexpr int64_t kRetryMin = 100;
 // A sphere's seed lattice is settled by this many rounds of flips and smoothing before refining.
 constexpr int kLatticeSettleRounds = 4;
 // A face still stuck is refined once more from a first triangulation whose triangles turn by at
