@@ -117,9 +117,13 @@ Status Refiner::Verify(int64_t max_triangles) {
       double dense = DenseDeviation(surface_, uv, p, edges, limit, &where);
       if (m.violation > 1) {
         // Refinement left it over its estimate, an upper bound: the dense reading stands where
-        // it is within (a sliver's estimate can read over what the surface is).
-        if (!(dense <= limit)) continue;  // reported
-        m.deviation = dense, m.worst_uv = where, m.violation = dense / limit;
+        // it is within (a sliver's estimate can read over what the surface is). Not a fold, nor
+        // a miss of the other criteria: those stay (reported).
+        double other = 0;
+        if (criteria_.max_length > 0) other = m.max_length / criteria_.max_length;
+        if (criteria_.rd_tolerance > 0) other = std::max(other, m.rd / criteria_.rd_tolerance);
+        if (!(m.agreement > 0) || other > 1 || !(dense <= limit)) continue;
+        m.deviation = dense, m.worst_uv = where, m.violation = std::max(dense / limit, other);
       }
       if (!(dense > limit)) {
         // The other way round: the surface over the triangle to it or a neighbour.
