@@ -221,6 +221,45 @@ TEST(MeasureTest, SurfaceSideSeesTheSurfaceOverTheTriangle) {
   EXPECT_NEAR(SurfaceSideDeviation(*plane, uv, uv[0], 7, p, 1, 0.0, &where), 0, 1e-15);
 }
 
+// S(u,v) = (u, v, h exp(-((u - 0.9)^2 + v^2) / w^2)): a bump beside corner (1, 0) of a sliver
+// that runs along u, as on gmsh_wrenchnut's face 6 at 1e-3 (issue 36).
+class BumpSurface : public Surface {
+ public:
+  BumpSurface(double height, double width) : height_(height), width_(width) {}
+  Vec3 Point(double u, double v) override {
+    const double r2 = ((u - 0.9) * (u - 0.9) + v * v) / (width_ * width_);
+    return {u, v, height_ * std::exp(-r2)};
+  }
+
+ private:
+  double height_, width_;
+};
+
+TEST(MeasureTest, SurfaceSideFindsABulgeBetweenTheGridsSamples) {
+  BumpSurface bump(0.05, 0.08);
+  const Vec2 uv[3] = {{0, 0}, {1, 0}, {0, 0.1}};
+  Vec3 p[3];
+  for (int i = 0; i < 3; ++i) p[i] = bump.Point(uv[i].x, uv[i].y);
+  // The surface's largest distance from the triangle, by brute force over a fine grid.
+  double truth = 0;
+  for (int i = 0; i <= 400; ++i)
+    for (int j = 0; i + j <= 400; ++j) {
+      const Vec2 q = (1 - (i + j) / 400.0) * uv[0] + (i / 400.0 * uv[1] + j / 400.0 * uv[2]);
+      truth = std::max(truth, PointTriangleDistance(bump.Point(q.x, q.y), p[0], p[1], p[2]));
+    }
+  Vec2 where;
+  // The 1/8 grid alone (no limit) steps over the bump's top.
+  const double grid = SurfaceSideDeviation(bump, uv, uv[0], 7, p, 1, 0.0, &where);
+  EXPECT_LT(grid, 0.9 * truth);
+  // Asked whether it passes a limit below the truth, the cells around the bump are split until
+  // it is found; the reading never passes the truth (every reading is a real distance).
+  const double split = SurfaceSideDeviation(bump, uv, uv[0], 7, p, 1, 0.8 * truth, &where);
+  EXPECT_GT(split, 0.97 * truth);
+  EXPECT_LE(split, truth * (1 + 1e-9));
+  // Far below the readings the cells are not split (nothing to decide there).
+  EXPECT_EQ(SurfaceSideDeviation(bump, uv, uv[0], 7, p, 1, 100 * truth, &where), grid);
+}
+
 TEST(MeasureTest, SphereAndCylinderDeviationIsExact) {
   for (bool cylinder : {false, true}) {
     const double radius = 2.5;
