@@ -218,6 +218,9 @@ class FaceRun {
     if (Stopping()) return Stop();
     std::vector<DomainConflict> conflicts = FindConflicts(domain_, context_);
     if (Stopping()) return Stop();
+    bool no_area = !conflicts.empty();
+    for (const DomainConflict& c : conflicts) no_area = no_area && c.b < 0;
+    if (no_area && NoWidth()) return false;  // done: ok, with no triangles
     if (!conflicts.empty()) return Fail(DescribeConflict(domain_, conflicts.front()));
     return true;
   }
@@ -238,7 +241,26 @@ class FaceRun {
   bool Triangulate() {
     Status st = TriangulateDomain(domain_, seeds_, *surface_, context_, &mesh_);
     if (Stopping()) return Stop();
+    if (!st.ok() && NoWidth()) return false;  // done: ok, with no triangles
     if (!st.ok()) return Fail(st.message());
+    return true;
+  }
+
+  // A face whose boundary loops enclose no area in (u,v) and whose width (its exact area over
+  // half its boundary's length) is within the deviation: its points lie within that of its
+  // edges, which its neighbours mesh, so no triangles meet the request (a KiCad toroid's
+  // cylinder face between two edges that lie on each other, issue 35).
+  bool NoWidth() {
+    const double deviation = job_.criteria.max_deviation;
+    double perimeter = 0;  // along its edges' grids (the domain may have dropped a pinch)
+    for (int e : model_.face_edges[face_id_ - 1]) {
+      const std::vector<Vec3>& x = grids_[e - 1].xyz;
+      for (size_t k = 1; k < x.size(); ++k) perimeter += Dist(x[k - 1], x[k]);
+    }
+    const double width = perimeter > 0 ? 2 * f_.exact_area / perimeter : HUGE_VAL;
+    if (!(deviation > 0) || !(width <= deviation)) return false;
+    f_.status = FaceStatus::kOk;
+    f_.max_deviation = width;
     return true;
   }
 

@@ -149,6 +149,23 @@ TEST(FaceDomainTest, LoopOfTwoOneSegmentEdgesIsHealed) {
   EXPECT_LT(MeshArea(f), exact);
 }
 
+// A face between two straight edges that lie on each other (a KiCad toroid's cylinder face of
+// no width, issue 35): its loop encloses no area, and its points all lie on its edges, which the
+// neighbours mesh. It is ok with no triangles, not failed.
+TEST(FaceDomainTest, AFaceOfNoWidthIsOkWithNoTriangles) {
+  const gp_Pnt a(0, 0, 0), b(4, 0, 0);
+  TopoDS_Wire wire =
+      BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(a, b), BRepBuilderAPI_MakeEdge(b, a)).Wire();
+  std::vector<FaceMesh> faces;
+  ASSERT_NO_FATAL_FAILURE(
+      MeshFaces(BRepBuilderAPI_MakeFace(gp_Pln(gp::XOY()), wire).Face(), "no_width", 0.1, &faces));
+  ASSERT_EQ(faces.size(), 1u);
+  EXPECT_EQ(faces[0].status, FaceStatus::kOk) << faces[0].reason;
+  EXPECT_EQ(faces[0].reason, "");
+  EXPECT_EQ(faces[0].triangle_count(), 0);
+  EXPECT_LE(faces[0].max_deviation, 0.1);
+}
+
 // A 10 x 5 rectangle whose bottom edge has a pcurve moved by 0.02 along u: its ends miss the
 // neighbours' by 0.02 in (u,v), as real files do within their vertex tolerance.
 TopoDS_Shape RectangleWithShiftedPcurve(double vertex_tolerance) {
