@@ -45,8 +45,6 @@ constexpr double kKillGrace = 0.5;
 // Options that do not change the mesh: a file done with other values is not done again.
 const std::set<std::string> kNotCompared = {"--threads", "--timeout", "--cache-dir",
                                             "--cache-dir-bytes"};
-// The name Partial() gives, with the level a --lod run adds.
-const std::regex kPartialName(R"(\..+\.partial(\.lod\d+)?\.[A-Za-z0-9]+)");
 // How many files the summary names as the slowest and the worst.
 constexpr size_t kSummaryFiles = 5;
 
@@ -349,6 +347,9 @@ Status Batch::Prepare() {
 
 // A killed run leaves its children's partial files (hidden, ".NAME.partial.EXT"): remove them.
 void Batch::SweepPartials() {
+  // The name Partial() gives, with the level a --lod run adds; compiled on first use, not at
+  // every start-up of the CLI.
+  static const std::regex kPartialName(R"(\..+\.partial(\.lod\d+)?\.[A-Za-z0-9]+)");
   std::error_code error;
   std::vector<fs::path> partials;
   for (fs::recursive_directory_iterator it(out_, error), end; !error && it != end;
