@@ -25,6 +25,7 @@ import datetime
 import json
 import math
 import os
+import shlex
 import subprocess
 import sys
 
@@ -128,12 +129,16 @@ def main():
 def write(a, rows, rels):
     commit = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
+    script = os.path.relpath(os.path.abspath(sys.argv[0]), REPO)
+    command = " ".join(["/usr/bin/python3", script] + [shlex.quote(x) for x in sys.argv[1:]])
+    rdmesh = os.path.join(a.build, "bin", "rdmesh")
     load = os.getloadavg()
     L = ["# Off the surface: triangles at the same request, measured both ways", "",
          "Written by `bench/quality/off_surface.py` (its docstring says how). Made with:", "",
-         "```", "/usr/bin/python3 bench/quality/off_surface.py", "```", "",
+         "```", command, "```", "",
          "- %s UTC, commit `%s`; load average at the end %.1f %.1f %.1f (2 cores, shared)" %
          (datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M"), commit, *load),
+         "- rdmesh: `%s`" % rdmesh,
          "- sym = the yardstick's hausdorff_sym_rel over the request (the larger of mesh to "
          "surface and surface to mesh); off / on = triangles of `--off-surface` over the "
          "default mode's, at the same request", ""]
