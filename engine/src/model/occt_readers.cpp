@@ -24,19 +24,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <istream>
+#include <tuple>
 #include <vector>
 
+#include "model/length_unit.h"
 #include "model/reader_support.h"
 #include "model/step_precheck.h"
 
 namespace rdmesh {
 
 namespace {
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 Handle(TDocStd_Document) NewXcafDocument() {
   // Not NewDocument(): that registers the document in the application's session for good.
@@ -45,38 +42,8 @@ Handle(TDocStd_Document) NewXcafDocument() {
   return doc;
 }
 
-struct LengthUnit {
-  const char* name;
-  double mm;
-};
-
-// Maps a STEP or IGES unit name ("MILLIMETRE", "INCH", "MM", "METRE", ...) to a short name.
-LengthUnit UnitFromName(std::string name) {
-  std::string key;
-  for (char c : name)
-    if (std::isalpha(static_cast<unsigned char>(c)))
-      key += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  static const struct {
-    const char* key;
-    LengthUnit unit;
-  } kUnits[] = {
-      {"MILLIMETRE", {"mm", 1.0}},  {"MILLIMETER", {"mm", 1.0}},  {"MM", {"mm", 1.0}},
-      {"CENTIMETRE", {"cm", 10.0}}, {"CENTIMETER", {"cm", 10.0}}, {"CM", {"cm", 10.0}},
-      {"METRE", {"m", 1000.0}},     {"METER", {"m", 1000.0}},     {"M", {"m", 1000.0}},
-      {"KILOMETRE", {"km", 1e6}},   {"KILOMETER", {"km", 1e6}},   {"KM", {"km", 1e6}},
-      {"MICROMETRE", {"um", 1e-3}}, {"MICROMETER", {"um", 1e-3}}, {"MICRON", {"um", 1e-3}},
-      {"INCH", {"inch", 25.4}},     {"IN", {"inch", 25.4}},       {"FOOT", {"foot", 304.8}},
-      {"FT", {"foot", 304.8}},      {"MIL", {"mil", 0.0254}},     {"MILE", {"mile", 1609344.0}},
-  };
-  for (const auto& entry : kUnits)
-    if (key == entry.key) return entry.unit;
-  return {"", 1.0};
-}
-
 void SetUnit(ReadShape* read, const std::string& raw_name) {
-  LengthUnit unit = UnitFromName(raw_name);
-  read->length_unit = unit.name[0] != '\0' ? unit.name : Lower(raw_name);
-  read->unit_scale_mm = unit.mm;
+  std::tie(read->length_unit, read->unit_scale_mm) = LengthUnitOf(raw_name);
 }
 
 // Which parser complaints refuse a file before the transfer. IGES: any complaint on a geometric

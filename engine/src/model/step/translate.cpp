@@ -47,6 +47,7 @@
 #include <unordered_set>
 
 #include "core/parallel.h"
+#include "model/length_unit.h"
 #include "model/step/entities.h"
 #include "model/step/finish.h"
 #include "model/step/geometry.h"
@@ -518,28 +519,6 @@ std::string Translator::LengthUnitName() {
     if (auto names = UnitNames(entities_, instance)) return (*names)[0];
   }
   return "MILLIMETRE";
-}
-
-// The short unit name and millimetres per unit that model_readers gives a unit name.
-std::pair<std::string, double> EngineUnit(const std::string& raw) {
-  std::string key;
-  for (char c : raw)
-    if (std::isalpha(static_cast<unsigned char>(c)))
-      key += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  static const std::map<std::string, std::pair<const char*, double>> kUnits = {
-      {"MILLIMETRE", {"mm", 1.0}},  {"MILLIMETER", {"mm", 1.0}},  {"MM", {"mm", 1.0}},
-      {"CENTIMETRE", {"cm", 10.0}}, {"CENTIMETER", {"cm", 10.0}}, {"CM", {"cm", 10.0}},
-      {"METRE", {"m", 1000.0}},     {"METER", {"m", 1000.0}},     {"M", {"m", 1000.0}},
-      {"KILOMETRE", {"km", 1e6}},   {"KILOMETER", {"km", 1e6}},   {"KM", {"km", 1e6}},
-      {"MICROMETRE", {"um", 1e-3}}, {"MICROMETER", {"um", 1e-3}}, {"MICRON", {"um", 1e-3}},
-      {"INCH", {"inch", 25.4}},     {"IN", {"inch", 25.4}},       {"FOOT", {"foot", 304.8}},
-      {"FT", {"foot", 304.8}},      {"MIL", {"mil", 0.0254}},     {"MILE", {"mile", 1609344.0}},
-  };
-  auto found = kUnits.find(key);
-  if (found != kUnits.end()) return {found->second.first, found->second.second};
-  std::string lower = raw;
-  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return {lower, 1.0};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1368,7 +1347,7 @@ Translated Translator::Run() {
   out.stage_seconds.emplace_back("regularity", Since(stage));
 
   stage = Clock::now();
-  std::tie(out.read.length_unit, out.read.unit_scale_mm) = EngineUnit(LengthUnitName());
+  std::tie(out.read.length_unit, out.read.unit_scale_mm) = LengthUnitOf(LengthUnitName());
   BuildDocument(root_shapes, &out.read);
   out.stage_seconds.emplace_back("document", Since(stage));
   out.items = static_cast<int>(items_.size());
