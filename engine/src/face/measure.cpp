@@ -5,6 +5,13 @@
 
 namespace rdmesh {
 
+double OtherCriteriaRatio(const FaceCriteria& c, const TriangleMeasure& m) {
+  double v = 0;
+  if (c.rd_tolerance > 0) v = std::max(v, m.rd / c.rd_tolerance);
+  if (c.max_length > 0) v = std::max(v, m.max_length / c.max_length);
+  return v;
+}
+
 namespace {
 
 // Largest |h| of the quadratic h(b) = A b1 b2 + B b2 b0 + C b0 b1 over the triangle, where
@@ -289,10 +296,8 @@ double CentroidSplitRd(const Vec3 p[3], Vec3 cen, double area2) {
 // Sets m->deviation to dev and m->violation to the largest of the criteria's ratios.
 void Conclude(const FaceCriteria& c, double dev, TriangleMeasure* m) {
   m->deviation = dev;
-  double v = 0;
+  double v = OtherCriteriaRatio(c, *m);
   if (c.max_deviation > 0) v = std::max(v, dev / c.max_deviation);
-  if (c.rd_tolerance > 0) v = std::max(v, m->rd / c.rd_tolerance);
-  if (c.max_length > 0) v = std::max(v, m->max_length / c.max_length);
   if (c.min_length > 0 && m->max_length < 2 * c.min_length) v = std::min(v, 1.0);
   m->violation = v;
 }

@@ -46,6 +46,10 @@ TriangleMeasure MeasureTriangle(Surface& surface, const Vec2 uv[3], const Vec3 x
 bool MeasureTriangleBelow(Surface& surface, const Vec2 uv[3], const Vec3 xyz[3],
                           const FaceCriteria& criteria, double limit, TriangleMeasure* m);
 
+/// The largest of a measured triangle's ratios to the criteria other than the deviation (its
+/// longest edge over max_length, its RD over rd_tolerance; 0 where neither is set).
+double OtherCriteriaRatio(const FaceCriteria& c, const TriangleMeasure& m);
+
 /// How well the triangle's 3D normal agrees with the surface normals at its corners (`normals`,
 /// oriented as Su x Sv): the smallest cosine between them. kInvalid when the (u,v) orientation
 /// is not positive or the triangle is degenerate in 3D other than at a pole (two corners at one

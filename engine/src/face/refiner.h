@@ -127,6 +127,7 @@ class Refiner {
   bool SplitAnyEdge(int t, const Vec3 p[3], SplitMode mode);
   bool SplitEdge(int t, int i, SplitMode mode, double at = -1);
   bool SplitAtPoint(int t, Vec2 q);
+  bool SplitAtNode(int t, int node, SplitMode mode);
   bool RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* tris, Candidate* cand);
   bool ReshapeByFlip(int t);
   bool TryFlip(int t, int i, Phase phase);

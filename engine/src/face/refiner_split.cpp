@@ -119,9 +119,7 @@ Status Refiner::Verify(int64_t max_triangles) {
         // Refinement left it over its estimate, an upper bound: the dense reading stands where
         // it is within (a sliver's estimate can read over what the surface is). Not a fold, nor
         // a miss of the other criteria: those stay (reported).
-        double other = 0;
-        if (criteria_.max_length > 0) other = m.max_length / criteria_.max_length;
-        if (criteria_.rd_tolerance > 0) other = std::max(other, m.rd / criteria_.rd_tolerance);
+        const double other = OtherCriteriaRatio(criteria_, m);
         if (!(m.agreement > 0) || other > 1 || !(dense <= limit)) continue;
         m.deviation = dense, m.worst_uv = where, m.violation = std::max(dense / limit, other);
       }
@@ -155,9 +153,8 @@ Status Refiner::Verify(int64_t max_triangles) {
     // A surface-side reading is split where the surface is farthest from the mesh: a sliver's
     // own splits bisect its long edge, away from a bulge beside its corner.
     for (const SideReading& r : side)
-      if (mesh_.alive[r.t] && stamp_[r.t] == r.stamp && mesh_.TriangleCount() < max_triangles &&
-          SplitAtPoint(r.t, measure_[r.t].worst_uv))
-        ++stats_.splits;
+      if (mesh_.alive[r.t] && stamp_[r.t] == r.stamp && mesh_.TriangleCount() < max_triangles)
+        SplitAtPoint(r.t, measure_[r.t].worst_uv);
     Status st = SplitViolating(max_triangles);
     if (!st.ok()) return st;
     for (const SideReading& r : side)
@@ -298,19 +295,26 @@ bool Refiner::SplitAtAreaOptimum(int t, const Vec2 uv[3], const Vec3 p[3], Split
       DropLastNode();
       continue;
     }
-    std::vector<int> cavity = {t};
-    std::vector<Tri> tris = SplitTriangleTris(mesh_, t, node);
-    Candidate cand = Evaluate(tris);
-    if (SplitOk(cand.min_agreement, cavity) ||
-        (mode.rescue && RescueSplit(node, &cavity, &tris, &cand))) {
-      Apply(cavity, tris, cand, Phase::kRefine);
-      ++stats_.splits;
-      Legalize(node);
-      return true;
-    }
-    DropLastNode();
+    if (SplitAtNode(t, node, mode)) return true;
   }
   return false;
+}
+
+// Splits t at `node` (the last one added) into three, with flips as well under mode.rescue
+// (RescueSplit); where that folds a child the node is dropped.
+bool Refiner::SplitAtNode(int t, int node, SplitMode mode) {
+  std::vector<int> cavity = {t};
+  std::vector<Tri> tris = SplitTriangleTris(mesh_, t, node);
+  Candidate cand = Evaluate(tris);
+  if (!SplitOk(cand.min_agreement, cavity) &&
+      !(mode.rescue && RescueSplit(node, &cavity, &tris, &cand))) {
+    DropLastNode();
+    return false;
+  }
+  Apply(cavity, tris, cand, Phase::kRefine);
+  ++stats_.splits;
+  Legalize(node);
+  return true;
 }
 
 // No interior point keeps the children unfolded: try the triangle's edges before giving up.
@@ -345,17 +349,7 @@ bool Refiner::SplitAtPoint(int t, Vec2 q) {
     }
     return false;
   }
-  const int node = NewNode(q);
-  std::vector<int> cavity = {t};
-  std::vector<Tri> tris = SplitTriangleTris(mesh_, t, node);
-  Candidate cand = Evaluate(tris);
-  if (!SplitOk(cand.min_agreement, cavity) && !RescueSplit(node, &cavity, &tris, &cand)) {
-    DropLastNode();
-    return false;
-  }
-  Apply(cavity, tris, cand, Phase::kRefine);
-  Legalize(node);
-  return true;
+  return SplitAtNode(t, NewNode(q), SplitMode{true, false});
 }
 
 bool Refiner::SplitEdge(int t, int i, SplitMode mode, double at) {
