@@ -85,10 +85,12 @@ void AddMeshFlags(CLI::App* app, MeshFlags* flags) {
                 "Convert every face to a B-spline surface before meshing (default: exact "
                 "surfaces)")
       ->group("Meshing");
-  app->add_flag("--off-surface", o.off_surface,
-                "Let the nodes leave the surface: on faces that bend one way, the triangles lie on "
-                "both sides of it within the deviation, with about half as many (docs/METHOD.md); "
-                "normals stay the surface's; planes and saddles stay on it")
+  app->add_flag(
+         "--off-surface", o.off_surface,
+         "Let the nodes leave the surface: on faces that bend one way, the triangles lie on "
+         "both sides of it within the deviation, with about half as many (docs/METHOD.md); "
+         "normals stay the surface's; planes and saddles stay on it (a face that bends one way "
+         "in parts moves there only)")
       ->group("Meshing");
   app->add_option("--threads", o.threads, "Worker threads; 0 = all cores")
       ->capture_default_str()

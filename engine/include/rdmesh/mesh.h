@@ -54,10 +54,12 @@ struct FaceMesh {
   double exact_area = 0.0;     ///< area of the B-rep face, model units^2
   double seconds = 0.0;        ///< wall time spent on this face
   /// MeshOptions::off_surface: how far the face's interior nodes lie off its surface, along the
-  /// face's outward normal (negative: inward), model units; 0 on the surface.
+  /// face's outward normal (negative: inward), model units; 0 on the surface. A face that bends
+  /// one way in parts only moves there only: this is the offset where it moved.
   double offset = 0.0;
   /// MeshOptions::off_surface: why a face stayed on its surface (a plane, a saddle, or the
-  /// offset mesh missed the deviation); empty otherwise.
+  /// offset mesh missed the deviation), or, for a face moved in parts only, where it moved
+  /// ("moved where it bends one way (N of M grid points)..."); empty for a face moved whole.
   std::string offset_reason;
 
   int64_t triangle_count() const { return static_cast<int64_t>(triangles.size() / 3); }

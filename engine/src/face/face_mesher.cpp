@@ -322,16 +322,107 @@ class FaceRun {
     const double deviation = job_.criteria.max_deviation;
     if (!(deviation > 0) || surface_->planar) return KeepOn("a plane does not bend");
     const int side = job_.bend_sides ? (*job_.bend_sides)[face_id_ - 1] : 0;
-    if (side == 0) return KeepOn("it bends both ways (a saddle) or not at all");
-    offset_ = side * kOffSurfaceShare * deviation;
-    base_ = std::move(surface_);
-    surface_ = WithPointCache(MakeOffsetSurface(base_.get(), offset_));
-    criteria_.max_deviation = 2 * kOffSurfaceShare * deviation;
+    if (side != 0) {
+      offset_ = side * kOffSurfaceShare * deviation;
+      base_ = std::move(surface_);
+      surface_ = WithPointCache(MakeOffsetSurface(base_.get(), offset_));
+      OffCriteria();
+    } else if (!OffsetWhereItBendsOneWay(deviation)) {
+      return KeepOn("it bends both ways (a saddle) or not at all");
+    }
     seeds_.clear();
     PlaceSeeds();
     if (!Triangulate()) return false;
     MoveOwnBoundary();
     return true;
+  }
+
+  // A face that bends one way in parts only (a B-spline bent like a sphere but for a saddle
+  // near its rim; a torus's outer half): the offset varies over it, kOffSurfaceShare of the
+  // deviation toward the outer side where it bends one way and 0 where it bends both ways, and
+  // so does the band the refinement may use, twice the offset where it moved and the deviation
+  // where it did not: an interpolating mesh stays within the deviation on both sides in either.
+  // Read on a grid of the (u,v) bounds, each node's side by BendSide; a node keeps its side only
+  // when its neighbours have the same, so that the offset's ramp lies where the surface bends one
+  // way. False where no node keeps one.
+  bool OffsetWhereItBendsOneWay(double deviation) {
+    Surface& s = *surface_;
+    if (s.quadric.kind != Surface::Quadric::Kind::kNone) return false;
+    const int n = kOffsetFieldCells, row = n + 1;
+    const double du = (s.umax - s.umin) / n, dv = (s.vmax - s.vmin) / n;
+    if (!(du > 0) || !(dv > 0)) return false;
+    const double hu = kBendStep * (s.umax - s.umin), hv = kBendStep * (s.vmax - s.vmin);
+    std::vector<int> sides(row * row, 0);
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; j <= n; ++j) {
+        // Inside the bounds by a difference step, so that no sample leaves them.
+        const Vec2 q = {std::clamp(s.umin + i * du, s.umin + 2 * hu, s.umax - 2 * hu),
+                        std::clamp(s.vmin + j * dv, s.vmin + 2 * hv, s.vmax - 2 * hv)};
+        sides[i * row + j] = BendSide(s, {q}, hu, hv, kBendTolerance);
+      }
+    }
+    auto inside = [&](int i, int j) { return i >= 0 && i <= n && j >= 0 && j <= n; };
+    std::vector<int> kept_side(row * row, 0);
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; j <= n; ++j) {
+        const int side = sides[i * row + j];
+        bool same = side != 0;
+        for (int a = i - 1; same && a <= i + 1; ++a)
+          for (int b = j - 1; same && b <= j + 1; ++b)
+            same = !inside(a, b) || sides[a * row + b] == side;
+        if (same) kept_side[i * row + j] = side;
+      }
+    }
+    // Along the boundary the offset is 0 in the cells it crosses and ramps up over the next:
+    // a triangle from an edge's chord (which spends its own part of the band) to a node moved
+    // off would add the offset to it. The nodes of a seam or a pole stay on the surface too
+    // (MoveOwnBoundary): the surface may bend the other way along them.
+    for (const auto& segment : domain_.segments) {
+      const Vec2 a = domain_.uv[segment[0]], d = domain_.uv[segment[1]] - a;
+      const int pieces = 1 + static_cast<int>(2 * std::hypot(d.x / du, d.y / dv));
+      for (int m = 0; m <= pieces; ++m) {
+        const Vec2 q = a + (static_cast<double>(m) / pieces) * d;
+        const int i = static_cast<int>(std::floor((q.x - s.umin) / du));
+        const int j = static_cast<int>(std::floor((q.y - s.vmin) / dv));
+        for (int ii = std::max(i, 0); ii <= std::min(i + 1, n); ++ii)
+          for (int jj = std::max(j, 0); jj <= std::min(j + 1, n); ++jj)
+            kept_side[ii * row + jj] = 0;
+      }
+    }
+    offsets_ = UvGrid{s.umin, s.vmin, du, dv, n, n, {}};
+    scales_ = offsets_;
+    offsets_.values.assign(sides.size(), 0.0);
+    scales_.values.assign(sides.size(), 0.5 / kOffSurfaceShare);  // the deviation, of 2x share
+    int kept[2] = {0, 0};  // nodes moved toward -normal, +normal
+    for (size_t k = 0; k < kept_side.size(); ++k) {
+      if (kept_side[k] == 0) continue;
+      offsets_.values[k] = kept_side[k] * kOffSurfaceShare * deviation;
+      scales_.values[k] = 1.0;
+      ++kept[kept_side[k] > 0];
+    }
+    if (kept[0] + kept[1] == 0) {
+      offsets_ = scales_ = UvGrid();
+      return false;
+    }
+    offset_ = (kept[1] >= kept[0] ? 1 : -1) * kOffSurfaceShare * deviation;
+    base_ = std::move(surface_);
+    surface_ = WithPointCache(MakeFieldOffsetSurface(base_.get(), &offsets_));
+    OffCriteria();
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "moved where it bends one way (%d of %d grid points), on the surface elsewhere",
+                  kept[0] + kept[1], static_cast<int>(sides.size()));
+    f_.offset_reason = text;
+    return true;
+  }
+
+  // The criteria of the offset's refinement: twice the offset's band (where it varies, scaled
+  // to the deviation where it stays on), and the face's own surface to check against.
+  void OffCriteria() {
+    criteria_.max_deviation = 2 * kOffSurfaceShare * job_.criteria.max_deviation;
+    criteria_.deviation_scale = offsets_.values.empty() ? nullptr : &scales_;
+    criteria_.own_surface = base_.get();
+    criteria_.own_deviation = job_.criteria.max_deviation;
   }
 
   // Boundary nodes that no other face shares move off the surface with the interior: those of
@@ -382,14 +473,8 @@ class FaceRun {
       const Tri& tri = mesh_.tri[t];
       if (mesh_.pole_axis[tri[0]] + mesh_.pole_axis[tri[1]] + mesh_.pole_axis[tri[2]] > -3)
         continue;  // a pole triangle stands for no patch of its own
-      Vec2 uv[3], where;
-      Vec3 near[12];
-      mesh_.MeasureCorners(t, uv, near);
-      const int count = mesh_.CornersWithNeighbours(t, near);
-      int edges = 0;
-      for (int i = 0; i < 3; ++i) edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
-      double d = DenseDeviation(*base_, uv, near, edges, limit, &where);
-      d = std::max(d, SurfaceSideDeviation(*base_, uv, where, edges, near, count, limit, &where));
+      Vec2 where;
+      const double d = BothWaysDeviation(mesh_, t, *base_, limit, &where);
       deviation[t] = d, worst = std::max(worst, d);
       if (worst > limit) {
         char text[160];
@@ -423,7 +508,7 @@ class FaceRun {
     }
     base_ = std::move(surface_), surface_ = std::move(off_surface);
     mesh_ = std::move(off_mesh), stats_ = std::move(off_stats), offset_ = offset;
-    criteria_.max_deviation = 2 * kOffSurfaceShare * job_.criteria.max_deviation;
+    OffCriteria();
     return true;
   }
 
@@ -530,6 +615,8 @@ class FaceRun {
   std::unique_ptr<Surface> surface_;
   std::unique_ptr<Surface> base_;  // the face's own surface while surface_ is its offset
   double offset_ = 0;              // along the surface's Normal(): S + offset_ n is meshed
+  UvGrid offsets_, scales_;        // an offset that varies (OffsetWhereItBendsOneWay): S +
+                                   // offsets_ n is meshed, to the deviation times scales_
   bool moved_boundary_ = false;    // a vertex of the domain moved with its edges
   FaceDomain domain_;
   std::vector<Vec2> seeds_;

@@ -396,16 +396,36 @@ bool Measure(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& 
 
 }  // namespace
 
+double DeviationLimit(const FaceCriteria& c, const Vec2 uv[3]) {
+  if (c.deviation_scale == nullptr) return c.max_deviation;
+  const Vec2 cen = (1.0 / 3.0) * (uv[0] + uv[1] + uv[2]);
+  double scale = c.deviation_scale->At(cen.x, cen.y);
+  for (int i = 0; i < 3; ++i) scale = std::min(scale, c.deviation_scale->At(uv[i].x, uv[i].y));
+  return c.max_deviation * scale;
+}
+
+namespace {
+
+// The criteria for one triangle: a varying deviation limit fixed at its value there.
+FaceCriteria AtTriangle(const FaceCriteria& c, const Vec2 uv[3]) {
+  FaceCriteria local = c;
+  local.max_deviation = DeviationLimit(c, uv);
+  local.deviation_scale = nullptr;
+  return local;
+}
+
+}  // namespace
+
 TriangleMeasure MeasureTriangle(Surface& s, const Vec2 uv[3], const Vec3 p[3],
                                 const FaceCriteria& c) {
   TriangleMeasure m;
-  Measure(s, uv, p, c, false, 0, &m);
+  Measure(s, uv, p, c.deviation_scale ? AtTriangle(c, uv) : c, false, 0, &m);
   return m;
 }
 
 bool MeasureTriangleBelow(Surface& s, const Vec2 uv[3], const Vec3 p[3], const FaceCriteria& c,
                           double limit, TriangleMeasure* m) {
-  return Measure(s, uv, p, c, true, limit, m);
+  return Measure(s, uv, p, c.deviation_scale ? AtTriangle(c, uv) : c, true, limit, m);
 }
 
 double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3]) {
@@ -430,7 +450,8 @@ double TriangleAgreement(const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3
 }
 
 void MeasureEdgeHeights(Surface& s, const Vec2 uv[3], const Vec3 p[3], const Vec3 normals[3],
-                        const FaceCriteria& c, int edges, TriangleMeasure* m) {
+                        const FaceCriteria& criteria, int edges, TriangleMeasure* m) {
+  const FaceCriteria c = criteria.deviation_scale ? AtTriangle(criteria, uv) : criteria;
   if (!(c.max_deviation > 0) || (c.min_length > 0 && m->max_length < 2 * c.min_length)) return;
   if (m->exact) return;  // nothing to add
   for (int i = 0; i < 3; ++i) {

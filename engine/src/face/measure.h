@@ -7,6 +7,7 @@
 // several.
 
 #include "core/geom.h"
+#include "geometry/offset_surface.h"
 #include "geometry/surface.h"
 
 namespace rdmesh {
@@ -19,7 +20,21 @@ struct FaceCriteria {
   double min_length = 0;        ///< never split a triangle whose longest edge is below 2x this
   double min_normal_cos = 0.5;  ///< a triangle's normal must lie within acos(this) of its
                                 ///< corners' surface normals (fold guard)
+  /// Where set, the deviation allowed varies over the face: max_deviation times this scale
+  /// (in (0, 1]) at the triangle (DeviationLimit). Off the surface, a face that bends one way
+  /// in parts is offset there and may take twice the band, and stays on it elsewhere.
+  const UvGrid* deviation_scale = nullptr;
+  /// Off the surface: the face's own surface (the one meshed is its offset), against which the
+  /// final check also measures each triangle both ways and splits where it misses own_deviation.
+  /// An offset that bends both ways where it was read to bend one (a 2% curvature of the other
+  /// sign along a long triangle) puts the mesh outside the offset, past the band.
+  Surface* own_surface = nullptr;
+  double own_deviation = 0;
 };
+
+/// The deviation allowed for the triangle with corners uv[i]: max_deviation, times the least of
+/// deviation_scale at its corners and centroid where that is set.
+double DeviationLimit(const FaceCriteria& c, const Vec2 uv[3]);
 
 struct TriangleMeasure {
   double deviation = 0;   ///< model units

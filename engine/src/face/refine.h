@@ -46,4 +46,12 @@ Status RefineFace(WorkMesh* mesh, Surface& surface, const FaceCriteria& criteria
                   double scale_v, int64_t max_triangles, bool improve, Context* context,
                   RefineStats* stats, int settle_rounds = 0);
 
+/// Triangle t of `mesh` measured against `surface` both ways: from points of the triangle to
+/// the surface (DenseDeviation), and where that is within `limit`, from the surface over it to
+/// the nearest of it and its neighbours, and, where that is over, of every triangle at its
+/// corners (SurfaceSideDeviation). Edges of the boundary are not read (their chords hold their
+/// own deviation). The largest reading, its (u,v) into *where. Off the surface, the final check
+/// of the offset's mesh against the face's own surface.
+double BothWaysDeviation(const WorkMesh& mesh, int t, Surface& surface, double limit, Vec2* where);
+
 }  // namespace rdmesh

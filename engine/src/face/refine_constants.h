@@ -19,6 +19,8 @@ constexpr double kLargeAtCap = 0.1;
 constexpr int kSmallFoldGeneration = 6;
 // The final check (Refiner::Verify) splits in at most this many rounds.
 constexpr int kVerifyRounds = 6;
+// ... and off the surface, where it also checks against the face's own surface, this many.
+constexpr int kOwnVerifyRounds = 16;
 // Below this shape quality (1 = equilateral) a triangle to refine is a sliver: reshape it first.
 constexpr double kSliverQuality = 0.02;
 // A reshaping flip must raise its triangle's normal agreement by this much (no churn).
@@ -75,5 +77,8 @@ constexpr double kBendStep = 1e-4;
 // A principal curvature of the other sign below this share of the largest counts as none (a
 // near-cylinder's noise); the check against the surface catches what that lets through.
 constexpr double kBendTolerance = 0.02;
+// A face that bends one way in parts is read on a grid of this many cells a side over its (u,v)
+// bounds (OffsetWhereItBendsOneWay).
+constexpr int kOffsetFieldCells = 24;
 
 }  // namespace rdmesh

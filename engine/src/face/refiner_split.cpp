@@ -82,8 +82,7 @@ Status Refiner::SplitViolating(int64_t max_triangles) {
 }
 
 Status Refiner::Verify(int64_t max_triangles) {
-  const double limit = criteria_.max_deviation;
-  if (!(limit > 0) || surface_.planar) return Status::Ok();
+  if (!(criteria_.max_deviation > 0) || surface_.planar) return Status::Ok();
   std::vector<uint32_t> checked;  // per triangle: stamp_ when it was last checked (+1; 0 never)
   // A surface-side reading drives splits only: where none is made, the triangle keeps its
   // mesh-side measure. The reading is an upper bound (the nearest triangle may lie beyond those
@@ -92,9 +91,16 @@ Status Refiner::Verify(int64_t max_triangles) {
     int t;
     uint32_t stamp;
     TriangleMeasure before;
+    bool own = false;  // a reading against the face's own surface (off the surface)
   };
   std::vector<SideReading> side;
-  for (int round = 0; round <= kVerifyRounds && !stats_.budget_hit; ++round) {
+  // Off the surface, misses against the face's own surface take more rounds to settle: each
+  // split of a triangle across an offset's ramp leaves smaller ones across it.
+  const int rounds = criteria_.own_surface ? kOwnVerifyRounds : kVerifyRounds;
+  for (int round = 0; round <= rounds && !stats_.budget_hit; ++round) {
+    // A reading from the surface side depends on the triangle's neighbours too: off the
+    // surface, where splits move the mesh across a ramp, every triangle is read again.
+    if (criteria_.own_surface) checked.assign(mesh_.tri.size(), 0);
     checked.resize(mesh_.tri.size(), 0);
     int over = 0;
     side.clear();
@@ -105,15 +111,28 @@ Status Refiner::Verify(int64_t max_triangles) {
       checked[t] = stamp_[t] + 1u;
       if (criteria_.min_length > 0 && m.max_length < 2 * criteria_.min_length)
         continue;  // too small to split
-      Vec2 uv[3], uv_scratch[3];
+      Vec2 uv[3];
       Vec3 p[3];
       mesh_.MeasureCorners(t, uv, p);
+      const double limit = DeviationLimit(criteria_, uv);
       const Tri& tri = mesh_.tri[t];
       if (mesh_.pole_axis[tri[0]] + mesh_.pole_axis[tri[1]] + mesh_.pole_axis[tri[2]] > -3)
         continue;     // a pole triangle stands for no patch of its own
       int edges = 0;  // an edge grid's chord holds its own deviation, and cannot be split
       for (int i = 0; i < 3; ++i) edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
       Vec2 where;
+      // Off the surface, a triangle within the offset's band is read against the face's own
+      // surface too, as OffSurfaceHolds reads it, and split where it misses.
+      auto OwnMiss = [&] {
+        if (!criteria_.own_surface || round == rounds) return;
+        Vec2 at;
+        const double d =
+            BothWaysDeviation(mesh_, t, *criteria_.own_surface, criteria_.own_deviation, &at);
+        if (!(d > criteria_.own_deviation)) return;
+        side.push_back({t, stamp_[t], m, true});
+        m.worst_uv = at;
+        ++over;
+      };
       double dense = DenseDeviation(surface_, uv, p, edges, limit, &where);
       if (m.violation > 1) {
         // Refinement left it over its estimate, an upper bound: the dense reading stands where
@@ -128,20 +147,20 @@ Status Refiner::Verify(int64_t max_triangles) {
         Vec3 near[12];
         const int count = mesh_.CornersWithNeighbours(t, near);
         dense = SurfaceSideDeviation(surface_, uv, m.worst_uv, edges, near, count, limit, &where);
-        if (!(dense > limit)) continue;
+        if (!(dense > limit)) {
+          OwnMiss();
+          continue;
+        }
         // Over: the nearest triangle may lie one ring further (thin triangles around a corner).
         // Again against every triangle at the corners, which only lowers the reading.
-        std::vector<Vec3> ring(near, near + 3);
-        for (int v : tri)
-          for (int w : mesh_.Ring(v)) {
-            if (w == t) continue;
-            ring.resize(ring.size() + 3);
-            mesh_.MeasureCorners(w, uv_scratch, &ring[ring.size() - 3]);
-          }
+        const std::vector<Vec3> ring = mesh_.CornersAroundCorners(t);
         dense = SurfaceSideDeviation(surface_, uv, m.worst_uv, edges, ring.data(),
                                      static_cast<int>(ring.size() / 3), limit, &where);
-        if (!(dense > limit)) continue;
-        if (round == kVerifyRounds) continue;  // no split follows
+        if (!(dense > limit)) {
+          OwnMiss();
+          continue;
+        }
+        if (round == rounds) continue;  // no split follows
         side.push_back({t, stamp_[t], m});
       }
       m.deviation = dense, m.worst_uv = where;
@@ -149,12 +168,20 @@ Status Refiner::Verify(int64_t max_triangles) {
       ++over;
     }
     // The last round only checks (what it finds over stays so, and the face reports it).
-    if (over == 0 || round == kVerifyRounds) break;
+    if (over == 0 || round == rounds) break;
     // A surface-side reading is split where the surface is farthest from the mesh: a sliver's
     // own splits bisect its long edge, away from a bulge beside its corner.
-    for (const SideReading& r : side)
-      if (mesh_.alive[r.t] && stamp_[r.t] == r.stamp && mesh_.TriangleCount() < max_triangles)
-        SplitAtPoint(r.t, measure_[r.t].worst_uv);
+    for (const SideReading& r : side) {
+      if (!mesh_.alive[r.t] || stamp_[r.t] != r.stamp || mesh_.TriangleCount() >= max_triangles)
+        continue;
+      const Vec2 q = measure_[r.t].worst_uv;
+      if (SplitAtPoint(r.t, q) || !r.own) continue;
+      // Off the surface, a miss beside a boundary edge (which cannot be split) is split halfway
+      // toward the centroid: the triangles there must come closer to their own surface.
+      const Tri& tri = mesh_.tri[r.t];
+      const Vec2 centroid = (1.0 / 3.0) * (mesh_.uv[tri[0]] + mesh_.uv[tri[1]] + mesh_.uv[tri[2]]);
+      SplitAtPoint(r.t, 0.5 * (q + centroid));
+    }
     Status st = SplitViolating(max_triangles);
     if (!st.ok()) return st;
     for (const SideReading& r : side)
@@ -526,6 +553,26 @@ void Refiner::Finish() {
     stats_.max_deviation = std::max(stats_.max_deviation, measure_[t].deviation);
     stats_.deviation[t] = measure_[t].deviation;
   }
+}
+
+double BothWaysDeviation(const WorkMesh& mesh, int t, Surface& surface, double limit, Vec2* where) {
+  Vec2 uv[3];
+  Vec3 near[12];
+  mesh.MeasureCorners(t, uv, near);
+  int edges = 0;
+  for (int i = 0; i < 3; ++i) edges |= (mesh.kind[t][i] == EdgeKind::kFree) << i;
+  const double dense = DenseDeviation(surface, uv, near, edges, limit, where);
+  if (dense > limit) return dense;
+  const int count = mesh.CornersWithNeighbours(t, near);
+  Vec2 at;
+  double side = SurfaceSideDeviation(surface, uv, *where, edges, near, count, limit, &at);
+  if (side > limit) {
+    const std::vector<Vec3> ring = mesh.CornersAroundCorners(t);
+    side = SurfaceSideDeviation(surface, uv, *where, edges, ring.data(),
+                                static_cast<int>(ring.size() / 3), limit, &at);
+  }
+  if (side > dense) *where = at;
+  return std::max(dense, side);
 }
 
 Status RefineFace(WorkMesh* mesh, Surface& surface, const FaceCriteria& criteria, double scale_u,

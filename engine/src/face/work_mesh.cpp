@@ -44,6 +44,19 @@ int WorkMesh::CornersWithNeighbours(int t, Vec3 out[12]) const {
   return count;
 }
 
+std::vector<Vec3> WorkMesh::CornersAroundCorners(int t) const {
+  Vec2 uv_scratch[3];
+  std::vector<Vec3> out(3);
+  MeasureCorners(t, uv_scratch, out.data());
+  for (int v : tri[t])
+    for (int w : Ring(v)) {
+      if (w == t) continue;
+      out.resize(out.size() + 3);
+      MeasureCorners(w, uv_scratch, &out[out.size() - 3]);
+    }
+  return out;
+}
+
 void WorkMesh::FoldCorners(const std::array<int, 3>& t, Vec2 q[3], Vec3 x[3], Vec3 n[3]) const {
   for (int i = 0; i < 3; ++i) q[i] = uv[t[i]], x[i] = xyz[t[i]], n[i] = normal[t[i]];
   for (int i = 0; i < 3; ++i) {

@@ -47,6 +47,10 @@ struct WorkMesh {
   /// MeasureCorners' points of triangle t and of its live neighbours, three per triangle, into
   /// out[0..12): how many triangles (1 to 4).
   int CornersWithNeighbours(int t, Vec3 out[12]) const;
+  /// MeasureCorners' points of triangle t, then of every other triangle at each of its corners
+  /// (Ring), three per triangle: the triangles the mesh's nearest point to a point over t can
+  /// lie on where thin triangles meet at a corner.
+  std::vector<Vec3> CornersAroundCorners(int t) const;
   /// The corners of triangle t for the fold guard (TriangleAgreement). The surface normal at a
   /// pole depends on the direction it is approached from, so a pole corner takes its
   /// neighbours' mean normal.

@@ -35,6 +35,18 @@ int BendSide(Surface& s, const std::vector<Vec2>& samples, double hu, double hv,
   return 0;
 }
 
+double UvGrid::At(double u, double v) const {
+  if (nu <= 0 || nv <= 0) return values.empty() ? 0.0 : values[0];
+  const double x = std::clamp((u - umin) / du, 0.0, static_cast<double>(nu));
+  const double y = std::clamp((v - vmin) / dv, 0.0, static_cast<double>(nv));
+  const int i = std::min(static_cast<int>(x), nu - 1);
+  const int j = std::min(static_cast<int>(y), nv - 1);
+  const double a = x - i, b = y - j;
+  const int row = nv + 1, k = i * row + j;
+  return (1 - a) * ((1 - b) * values[k] + b * values[k + 1]) +
+         a * ((1 - b) * values[k + row] + b * values[k + row + 1]);
+}
+
 namespace {
 
 class OffsetSurface final : public Surface {
@@ -80,7 +92,29 @@ class OffsetSurface final : public Surface {
   double outward_distance_ = 0;
 };
 
+class FieldOffsetSurface final : public Surface {
+ public:
+  FieldOffsetSurface(Surface* base, const UvGrid* offsets) : base_(base), offsets_(offsets) {
+    umin = base->umin, umax = base->umax, vmin = base->vmin, vmax = base->vmax;
+    uknots = base->uknots, vknots = base->vknots;
+  }
+  Vec3 Point(double u, double v) override {
+    const Vec3 p = base_->Point(u, v);
+    const double d = offsets_->At(u, v);
+    return d == 0 ? p : p + d * base_->Normal(u, v);
+  }
+  Vec3 Normal(double u, double v) override { return base_->Normal(u, v); }
+
+ private:
+  Surface* base_;
+  const UvGrid* offsets_;
+};
+
 }  // namespace
+
+std::unique_ptr<Surface> MakeFieldOffsetSurface(Surface* base, const UvGrid* offsets) {
+  return std::make_unique<FieldOffsetSurface>(base, offsets);
+}
 
 std::unique_ptr<Surface> MakeOffsetSurface(Surface* base, double distance) {
   return std::make_unique<OffsetSurface>(base, distance);
