@@ -96,5 +96,33 @@ TEST(OffsetSurfaceTest, InwardOffsetOfACylinder) {
   EXPECT_NEAR(p.z, 0.3, 1e-9);
 }
 
+// A grid of 2 x 1 cells over [0, 2] x [0, 1]: bilinear inside, its edge values beyond it.
+TEST(UvGridTest, BilinearInsideConstantBeyond) {
+  UvGrid g{0.0, 0.0, 1.0, 1.0, 2, 1, {}};
+  // node (i, j) at i * 2 + j: value i + 10 j
+  for (int i = 0; i <= 2; ++i)
+    for (int j = 0; j <= 1; ++j) g.values.push_back(i + 10.0 * j);
+  EXPECT_DOUBLE_EQ(g.At(0, 0), 0);
+  EXPECT_DOUBLE_EQ(g.At(2, 1), 12);
+  EXPECT_DOUBLE_EQ(g.At(0.5, 0.5), 5.5);
+  EXPECT_DOUBLE_EQ(g.At(1.25, 0.2), 3.25);
+  EXPECT_DOUBLE_EQ(g.At(-3, 0.5), 5);  // clamped to u = 0
+  EXPECT_DOUBLE_EQ(g.At(9, 2), 12);    // clamped to the far corner
+}
+
+// S + offsets(u,v) n on a cylinder: the radius follows the grid, the normal is the base's.
+TEST(OffsetSurfaceTest, FieldOffsetFollowsItsGrid) {
+  auto cylinder = MakeCylinderSurface(1.5);
+  UvGrid g{0.0, 0.0, 1.0, 1.0, 1, 1, {0.0, 0.0, 0.2, 0.2}};  // 0 at u = 0, 0.2 at u = 1
+  auto offset = MakeFieldOffsetSurface(cylinder.get(), &g);
+  for (double u : {0.0, 0.5, 1.0, 3.0}) {
+    const Vec3 p = offset->Point(u, 0.3);
+    EXPECT_NEAR(std::hypot(p.x, p.y), 1.5 + 0.2 * std::min(u, 1.0), 1e-6) << u;
+    EXPECT_NEAR(p.z, 0.3, 1e-9);
+    const Vec3 n = offset->Normal(u, 0.3), m = cylinder->Normal(u, 0.3);
+    EXPECT_NEAR(Dist(n, m), 0, 1e-12);
+  }
+}
+
 }  // namespace
 }  // namespace rdmesh
