@@ -128,6 +128,8 @@ class Refiner {
   bool SplitEdge(int t, int i, SplitMode mode, double at = -1);
   bool SplitAtPoint(int t, Vec2 q);
   bool SplitAtNode(int t, int node, SplitMode mode);
+  bool CommitSplit(int node, SplitMode mode, std::vector<int>* cavity, std::vector<Tri>* tris,
+                   int64_t* count);
   bool RescueSplit(int node, std::vector<int>* cavity, std::vector<Tri>* tris, Candidate* cand);
   bool ReshapeByFlip(int t);
   bool TryFlip(int t, int i, Phase phase);

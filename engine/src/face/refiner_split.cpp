@@ -327,19 +327,26 @@ bool Refiner::SplitAtAreaOptimum(int t, const Vec2 uv[3], const Vec3 p[3], Split
   return false;
 }
 
-// Splits t at `node` (the last one added) into three, with flips as well under mode.rescue
-// (RescueSplit); where that folds a child the node is dropped.
+// Splits t at `node` (the last one added) into three (CommitSplit).
 bool Refiner::SplitAtNode(int t, int node, SplitMode mode) {
   std::vector<int> cavity = {t};
   std::vector<Tri> tris = SplitTriangleTris(mesh_, t, node);
-  Candidate cand = Evaluate(tris);
-  if (!SplitOk(cand.min_agreement, cavity) &&
-      !(mode.rescue && RescueSplit(node, &cavity, &tris, &cand))) {
+  return CommitSplit(node, mode, &cavity, &tris, &stats_.splits);
+}
+
+// The split of `cavity` into `tris` around `node` (the last one added), with flips as well
+// under mode.rescue (RescueSplit), counted in *count; where that folds a child the node is
+// dropped.
+bool Refiner::CommitSplit(int node, SplitMode mode, std::vector<int>* cavity,
+                          std::vector<Tri>* tris, int64_t* count) {
+  Candidate cand = Evaluate(*tris);
+  if (!SplitOk(cand.min_agreement, *cavity) &&
+      !(mode.rescue && RescueSplit(node, cavity, tris, &cand))) {
     DropLastNode();
     return false;
   }
-  Apply(cavity, tris, cand, Phase::kRefine);
-  ++stats_.splits;
+  Apply(*cavity, *tris, cand, Phase::kRefine);
+  ++*count;
   Legalize(node);
   return true;
 }
@@ -418,16 +425,7 @@ bool Refiner::SplitEdge(int t, int i, SplitMode mode, double at) {
   }
   int node = pole ? NewNode(place(s_best), true, b) : NewNode(place(s_best));
   SplitEdgeTris(mesh_, t, i, node, &cavity, &tris);
-  Candidate cand = Evaluate(tris);
-  if (!SplitOk(cand.min_agreement, cavity) &&
-      !(mode.rescue && RescueSplit(node, &cavity, &tris, &cand))) {
-    DropLastNode();
-    return false;
-  }
-  Apply(cavity, tris, cand, Phase::kRefine);
-  ++stats_.edge_splits;
-  Legalize(node);
-  return true;
+  return CommitSplit(node, mode, &cavity, &tris, &stats_.edge_splits);
 }
 
 // A split of a triangle whose long edges cut across a curved surface can fold a child that
