@@ -18,4 +18,11 @@ Bnd_Box SweptFaceBox(const TopoDS_Face& face);
 /// which each surface has; each is kept when it lies on the face. Void for other surfaces.
 Bnd_Box ClosedFormFaceBox(const TopoDS_Face& face);
 
+/// The tight box of a face on any other curved surface (B-spline, Bezier, revolution, extrusion,
+/// offset), without the tolerances: the edges' optimal boxes, and each coordinate's interior
+/// extremes that lie on the face, found on a grid over the face's (u, v) bounds and polished by
+/// Newton's method, each enlarged by Precision::Confusion() as AddOptimal enlarges the surface's.
+/// Void when the face has no boundary to start from.
+Bnd_Box SampledFaceBox(const TopoDS_Face& face);
+
 }  // namespace rdmesh

@@ -110,6 +110,21 @@ bool LooseBoxHolds(SurfaceType type) {
   }
 }
 
+// Surface types whose faces SampledFaceBox boxes (where it returns a box): AddOptimal's surface
+// optimiser is the slowest part of loading files with such faces.
+bool SampledFaces(SurfaceType type) {
+  switch (type) {
+    case SurfaceType::kBezier:
+    case SurfaceType::kBSpline:
+    case SurfaceType::kRevolution:
+    case SurfaceType::kOffset:
+    case SurfaceType::kOther:
+      return true;
+    default:
+      return false;
+  }
+}
+
 // Whether `inner`, grown by `margin`, lies inside `outer` (neither void nor open).
 bool Inside(const Bnd_Box& inner, const Bnd_Box& outer, double margin) {
   if (inner.IsVoid() || outer.IsVoid() || inner.IsOpen() || outer.IsOpen()) return false;
@@ -176,7 +191,12 @@ Bnd_Box BoundingBox(const Model& model, const std::vector<SurfaceType>& types) {
     runner.For(
         0, static_cast<int>(todo.size()),
         [&](int i) {
-          BRepBndLib::AddOptimal(model.face(todo[i]), tight[todo[i] - 1],
+          const int id = todo[i];
+          if (SampledFaces(types[id - 1])) {
+            tight[id - 1] = SampledFaceBox(model.face(id));
+            if (!tight[id - 1].IsVoid()) return;
+          }
+          BRepBndLib::AddOptimal(model.face(id), tight[id - 1],
                                  /*useTriangulation=*/false, /*useShapeTolerance=*/false);
         },
         Partition::kOnePerTask);

@@ -1,4 +1,5 @@
-// ClosedFormFaceBox against dense sampling of the face and against OCCT's BRepBndLib::AddOptimal.
+// ClosedFormFaceBox and SampledFaceBox against dense sampling of the face and against OCCT's
+// BRepBndLib::AddOptimal.
 
 #include "model/face_boxes.h"
 
@@ -6,18 +7,27 @@
 
 #include <BRepAlgoAPI_Cut.hxx>
 #include <BRepBndLib.hxx>
+#include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepFilletAPI_MakeFillet.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeRevol.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
 #include <BRepTools.hxx>
 #include <BRepTopAdaptor_FClass2d.hxx>
 #include <BRep_Tool.hxx>
+#include <GeomAPI_PointsToBSpline.hxx>
+#include <Geom_BSplineCurve.hxx>
+#include <Geom_BSplineSurface.hxx>
 #include <Geom_SphericalSurface.hxx>
 #include <Geom_Surface.hxx>
 #include <Geom_ToroidalSurface.hxx>
+#include <TColStd_Array1OfInteger.hxx>
+#include <TColStd_Array1OfReal.hxx>
+#include <TColgp_Array1OfPnt.hxx>
+#include <TColgp_Array2OfPnt.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
@@ -77,26 +87,28 @@ void ExpectTight(const Bnd_Box& box, const Bnd_Box& inner, double slack, double 
   }
 }
 
-// With `against_optimal`, also within 1e-6 of OCCT's AddOptimal box.
+// `box` of `face` against sampling (holding it within `slack` of the box's size) and, with
+// `against_optimal`, within 1e-6 of OCCT's AddOptimal box.
+void CheckBox(const TopoDS_Face& face, const Bnd_Box& box, double slack, bool against_optimal) {
+  ASSERT_FALSE(box.IsVoid());
+  const double size = std::sqrt(box.SquareExtent());
+  // Sampling reaches within (grid step)^2 of an interior extreme: 1e-4 of the size here.
+  {
+    SCOPED_TRACE("against sampling");
+    ExpectTight(box, SampledBox(face), slack * size, 1e-4 * size);
+  }
+  if (!against_optimal) return;
+  Bnd_Box optimal;
+  BRepBndLib::AddOptimal(face, optimal, /*useTriangulation=*/false, /*useShapeTolerance=*/false);
+  SCOPED_TRACE("against AddOptimal");
+  ExpectTight(box, optimal, 1e-6 * size, 1e-6 * size);
+}
+
 void CheckFaces(const TopoDS_Shape& shape, size_t expected_faces, bool against_optimal = true) {
   const std::vector<TopoDS_Face> faces = RoundFaces(shape);
   ASSERT_EQ(faces.size(), expected_faces);
-  for (const TopoDS_Face& face : faces) {
-    const Bnd_Box box = ClosedFormFaceBox(face);
-    ASSERT_FALSE(box.IsVoid());
-    const double size = std::sqrt(box.SquareExtent());
-    // Sampling reaches within (grid step)^2 of an interior extreme: 1e-4 of the size here.
-    {
-      SCOPED_TRACE("against sampling");
-      ExpectTight(box, SampledBox(face), 1e-9 * size, 1e-4 * size);
-    }
-    if (!against_optimal) continue;
-    Bnd_Box optimal;
-    BRepBndLib::AddOptimal(face, optimal, /*useTriangulation=*/false,
-                           /*useShapeTolerance=*/false);
-    SCOPED_TRACE("against AddOptimal");
-    ExpectTight(box, optimal, 1e-6 * size, 1e-6 * size);
-  }
+  for (const TopoDS_Face& face : faces)
+    CheckBox(face, ClosedFormFaceBox(face), /*slack=*/1e-9, against_optimal);
 }
 
 TEST(ClosedFormFaceBox, FilletedCylinderRimTiltedAndMoved) {
@@ -165,6 +177,92 @@ TEST(ClosedFormFaceBox, OtherSurfacesGiveAVoidBox) {
   TopoDS_Shape box = BRepPrimAPI_MakeBox(1, 2, 3).Shape();
   for (TopExp_Explorer it(box, TopAbs_FACE); it.More(); it.Next())
     EXPECT_TRUE(ClosedFormFaceBox(TopoDS::Face(it.Current())).IsVoid());
+}
+
+// A bicubic B-spline patch over [0, 10] x [0, 8] whose middle poles rise to `height`, turned
+// a little off the axes: a dome whose highest (or lowest) point is inside the face.
+Handle(Geom_BSplineSurface) Dome(double height) {
+  TColgp_Array2OfPnt poles(1, 5, 1, 5);
+  for (int i = 1; i <= 5; ++i)
+    for (int j = 1; j <= 5; ++j) {
+      const double lift =
+          (i > 1 && i < 5 && j > 1 && j < 5) ? height * (i == 3 && j == 3 ? 1.5 : 1) : 0;
+      poles(i, j) = gp_Pnt(2.5 * (i - 1), 2.0 * (j - 1), lift + 0.3 * i * j / 5);
+    }
+  TColStd_Array1OfReal knots(1, 2);
+  knots(1) = 0, knots(2) = 1;
+  TColStd_Array1OfInteger mults(1, 2);
+  mults(1) = mults(2) = 5;
+  Handle(Geom_BSplineSurface) dome =
+      new Geom_BSplineSurface(poles, knots, knots, mults, mults, 4, 4);
+  gp_Trsf turn;
+  turn.SetRotation(gp_Ax1(gp_Pnt(1, 2, 3), gp_Dir(1, 2, 0.5)), 0.2);
+  dome->Transform(turn);
+  return dome;
+}
+
+// SampledFaceBox enlarges interior extremes by Precision::Confusion(), as AddOptimal does.
+void CheckSampled(const TopoDS_Face& face, bool against_optimal) {
+  CheckBox(face, SampledFaceBox(face), /*slack=*/1e-6, against_optimal);
+}
+
+TEST(SampledFaceBox, BSplineDomeWithInteriorExtremes) {
+  for (double height : {6.0, -5.0, 0.5}) {
+    SCOPED_TRACE(height);
+    CheckSampled(BRepBuilderAPI_MakeFace(Dome(height), 0, 1, 0, 1, 1e-7).Face(),
+                 /*against_optimal=*/true);
+    // Part of its parameter range: the extremes move to the boundary or stay inside.
+    CheckSampled(BRepBuilderAPI_MakeFace(Dome(height), 0.1, 0.45, 0.2, 0.9, 1e-7).Face(),
+                 /*against_optimal=*/true);
+  }
+}
+
+TEST(SampledFaceBox, HoleCutOverTheDomesTop) {
+  // The top of the dome cut away by a hole: the face's highest points are on the hole's rim,
+  // not at the surface's interior extreme, which the face no longer has.
+  TopoDS_Face face = BRepBuilderAPI_MakeFace(Dome(6.0), 0, 1, 0, 1, 1e-7).Face();
+  double whole[6];
+  SampledFaceBox(face).Get(whole[0], whole[1], whole[2], whole[3], whole[4], whole[5]);
+  const gp_Pnt top = Dome(6.0)->Value(0.5, 0.5);
+  TopoDS_Shape prism =
+      BRepPrimAPI_MakeCylinder(gp_Ax2(top.Translated(gp_Vec(0, 0, -20)), gp::DZ()), 1.5, 40)
+          .Shape();
+  TopoDS_Shape cut = BRepAlgoAPI_Cut(face, prism).Shape();
+  int faces = 0;
+  for (TopExp_Explorer it(cut, TopAbs_FACE); it.More(); it.Next(), ++faces) {
+    CheckSampled(TopoDS::Face(it.Current()), /*against_optimal=*/false);
+    double c[6];
+    SampledFaceBox(TopoDS::Face(it.Current())).Get(c[0], c[1], c[2], c[3], c[4], c[5]);
+    EXPECT_LT(c[5], whole[5] - 0.1);  // the top went with the hole
+  }
+  EXPECT_EQ(faces, 1);
+}
+
+TEST(SampledFaceBox, RevolvedSplineProfile) {
+  // A B-spline profile turned 200 degrees about a tilted axis: extremes inside the face along
+  // the turn and along the profile.
+  TColgp_Array1OfPnt points(1, 5);
+  points(1) = gp_Pnt(2, 0, 0), points(2) = gp_Pnt(4, 0, 1), points(3) = gp_Pnt(5, 0, 3);
+  points(4) = gp_Pnt(3.5, 0, 5), points(5) = gp_Pnt(2.5, 0, 6);
+  Handle(Geom_BSplineCurve) profile = GeomAPI_PointsToBSpline(points).Curve();
+  TopoDS_Edge edge = BRepBuilderAPI_MakeEdge(profile).Edge();
+  const gp_Ax1 axis(gp_Pnt(0.5, -0.3, 0), gp_Dir(0.1, 0.2, 1));
+  TopoDS_Shape revolved = BRepPrimAPI_MakeRevol(edge, axis, 200 * M_PI / 180).Shape();
+  int faces = 0;
+  for (TopExp_Explorer it(revolved, TopAbs_FACE); it.More(); it.Next(), ++faces)
+    CheckSampled(TopoDS::Face(it.Current()), /*against_optimal=*/true);
+  EXPECT_EQ(faces, 1);
+}
+
+TEST(SampledFaceBox, RuledAndClosedFormSurfacesGiveAVoidBox) {
+  // Planes, cylinders and the like are boxed by their edges (AddOptimal's own way, cheap);
+  // spheres and tori by ClosedFormFaceBox.
+  TopoDS_Shape cylinder = BRepPrimAPI_MakeCylinder(2, 5).Shape();
+  for (TopExp_Explorer it(cylinder, TopAbs_FACE); it.More(); it.Next())
+    EXPECT_TRUE(SampledFaceBox(TopoDS::Face(it.Current())).IsVoid());
+  TopoDS_Shape sphere = BRepPrimAPI_MakeSphere(3).Shape();
+  for (TopExp_Explorer it(sphere, TopAbs_FACE); it.More(); it.Next())
+    EXPECT_TRUE(SampledFaceBox(TopoDS::Face(it.Current())).IsVoid());
 }
 
 }  // namespace
