@@ -35,6 +35,7 @@
 #include <ShapeBuild.hxx>
 #include <ShapeBuild_Edge.hxx>
 #include <ShapeBuild_ReShape.hxx>
+#include <ShapeExtend.hxx>
 #include <ShapeExtend_WireData.hxx>
 #include <ShapeFix.hxx>
 #include <ShapeFix_Edge.hxx>
@@ -997,6 +998,34 @@ TopoDS_Shape HealedShape(const BrepItem& item, const TopoDS_Shape& raw) {
 
 namespace {
 
+// ShapeBuild_ReShape whose Apply returns a shape none of whose sub-shapes (down to `until`) is
+// recorded as it is, with the status OK, as the base class does: the base copies every sub-shape
+// on its way down (edges with all their curve representations) only to find nothing changed,
+// which was most of ShapeFix_Face's time (ShapeFix_Wire applies the context to its wire and
+// edges dozens of times per face). Recorded shapes, and contexts that consider locations, go
+// the base class's way.
+class QuickReShape : public ShapeBuild_ReShape {
+ public:
+  TopoDS_Shape Apply(const TopoDS_Shape& shape,
+                     const TopAbs_ShapeEnum until = TopAbs_SHAPE) override {
+    if (shape.IsNull() || ModeConsiderLocation() || RecordedWithin(shape, until))
+      return ShapeBuild_ReShape::Apply(shape, until);
+    myStatus = ShapeExtend::EncodeStatus(ShapeExtend_OK);
+    return shape;
+  }
+
+ private:
+  // Whether `shape` or a sub-shape the base class's Apply would visit is recorded.
+  bool RecordedWithin(const TopoDS_Shape& shape, TopAbs_ShapeEnum until) const {
+    if (IsRecorded(shape)) return true;
+    const TopAbs_ShapeEnum type = shape.ShapeType();
+    if (type >= until || type == TopAbs_VERTEX || type == TopAbs_SHAPE) return false;
+    for (TopoDS_Iterator it(shape, Standard_False); it.More(); it.Next())
+      if (RecordedWithin(it.Value(), until)) return true;
+    return false;
+  }
+};
+
 // One face of one item, fixed on its own.
 struct FaceJob {
   BrepItem* item = nullptr;
@@ -1149,7 +1178,7 @@ void FixFace(FaceJob* job) {
   fix->SetPrecision(units.precision);
   fix->SetMaxTolerance(units.max_tolerance);
   fix->FixWireTool()->FixSameParameterMode() = Standard_False;
-  job->context = new ShapeBuild_ReShape;
+  job->context = new QuickReShape;
   fix->SetContext(job->context);
   fix->Init(job->local);
   fix->Perform();
