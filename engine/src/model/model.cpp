@@ -20,6 +20,7 @@
 
 #include "core/parallel.h"
 #include "geometry/surface_type.h"
+#include "model/face_area.h"
 #include "model/model_info.h"
 #include "model/model_payload.h"
 #include "model/model_readers.h"
@@ -85,6 +86,10 @@ void ComputeFaceAreas(Model* model) {
   ParallelRunner(0).For(0, static_cast<int>(computed.size()), [&](int i) {
     const int id = computed[i];
     try {
+      if (const std::optional<double> area = ClosedFormFaceArea(model->face(id))) {
+        model->face_area[id - 1] = *area;
+        return;
+      }
       GProp_GProps props;
       BRepGProp::SurfaceProperties(model->face(id), props);
       model->face_area[id - 1] = std::abs(props.Mass());
