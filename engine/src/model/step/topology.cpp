@@ -12,6 +12,7 @@
 #include <BRepLib_MakeEdge.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_CurveRepresentation.hxx>
+#include <BRep_GCurve.hxx>
 #include <BRep_ListIteratorOfListOfCurveRepresentation.hxx>
 #include <BRep_TEdge.hxx>
 #include <BRep_TVertex.hxx>
@@ -52,6 +53,7 @@
 #include <TopExp_Explorer.hxx>
 #include <TopTools_DataMapOfShapeReal.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <TopTools_MapOfShape.hxx>
 #include <TopTools_ShapeMapHasher.hxx>
 #include <TopoDS.hxx>
@@ -72,6 +74,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -1026,6 +1029,19 @@ class QuickReShape : public ShapeBuild_ReShape {
   }
 };
 
+// A pcurve StorePlanePcurves stored, held (so that no other curve takes its address) with its
+// points at the ends of its range, to tell whether the fixing changed it in place.
+struct StoredPcurve {
+  Handle(Geom2d_Curve) curve;
+  double first = 0, last = 0;
+  gp_Pnt2d at_first, at_last;
+  Handle(Geom_Curve) curve3d;  // the edge's 3D curve it was projected from, and its range
+  TopLoc_Location location3d;
+  double first3d = 0, last3d = 0;
+};
+// The pcurves StorePlanePcurves stored, by address.
+using StoredPcurves = std::map<const Geom2d_Curve*, StoredPcurve>;
+
 // One face of one item, fixed on its own.
 struct FaceJob {
   BrepItem* item = nullptr;
@@ -1039,6 +1055,7 @@ struct FaceJob {
   TopTools_DataMapOfShapeShape raw_of;  // healed edge or vertex -> the raw one
   TopTools_DataMapOfShapeShape healed_of_shared;  // raw shared edge -> its healed copy
   TopTools_DataMapOfShapeReal vertex_tolerances;  // raw vertex -> tolerance asked for
+  StoredPcurves stored;                           // plane pcurves kept on `healed` (FixFace)
 };
 
 bool IsIdentity(const TopoDS_Shape& shape) { return shape.Location().IsIdentity(); }
@@ -1122,9 +1139,6 @@ bool CopyFace(FaceJob* job) {
 // every BRep_Tool::CurveOnSurface call.
 bool OnPlane(const TopoDS_Face& face) { return FaceSurfaceType(face) == SurfaceType::kPlane; }
 
-// The pcurves StorePlanePcurves stored, by address, held so that no other curve takes one.
-using StoredPcurves = std::map<const Geom2d_Curve*, Handle(Geom2d_Curve)>;
-
 // Stores on each edge of the planar `face` the pcurve BRep_Tool::CurveOnSurface projects, so
 // that the fixing, which asks for each one dozens of times, projects it once.
 StoredPcurves StorePlanePcurves(const TopoDS_Face& face) {
@@ -1137,10 +1151,14 @@ StoredPcurves StorePlanePcurves(const TopoDS_Face& face) {
     Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last, &was_stored);
     if (pcurve.IsNull() || was_stored) continue;
     double first3d, last3d;
-    if (BRep_Tool::Curve(edge, first3d, last3d).IsNull() || first3d != first || last3d != last)
+    TopLoc_Location location3d;
+    Handle(Geom_Curve) curve3d = BRep_Tool::Curve(edge, location3d, first3d, last3d);
+    if (curve3d.IsNull() || first3d != first || last3d != last)
       continue;  // only where the stored curve reads back over the same range
     builder.UpdateEdge(edge, pcurve, face, BRep_Tool::Tolerance(edge));
-    stored.emplace(pcurve.get(), pcurve);
+    stored.emplace(pcurve.get(),
+                   StoredPcurve{pcurve, first, last, pcurve->Value(first), pcurve->Value(last),
+                                curve3d, location3d, first3d, last3d});
   }
   return stored;
 }
@@ -1170,6 +1188,48 @@ void UnstorePlanePcurves(const TopoDS_Face& face, const StoredPcurves& stored) {
   }
 }
 
+// Whether every stored pcurve still reads as when it was stored (ShapeFix reverses or shifts
+// some pcurves in place), and every edge of the fixed `face` that holds one still has the 3D
+// curve and range it was projected from (else OCCT would project another).
+bool Unchanged(const StoredPcurves& stored, const TopoDS_Shape& face) {
+  for (const auto& [address, pcurve] : stored) {
+    if (!pcurve.curve->Value(pcurve.first).IsEqual(pcurve.at_first, 0) ||
+        !pcurve.curve->Value(pcurve.last).IsEqual(pcurve.at_last, 0))
+      return false;
+  }
+  if (face.IsNull()) return false;
+  for (TopExp_Explorer it(face, TopAbs_EDGE); it.More(); it.Next()) {
+    const TopoDS_Edge& edge = TopoDS::Edge(it.Current());
+    Handle(BRep_TEdge) te = Handle(BRep_TEdge)::DownCast(edge.TShape());
+    if (te.IsNull()) continue;
+    for (BRep_ListIteratorOfListOfCurveRepresentation c(te->Curves()); c.More(); c.Next()) {
+      const Handle(BRep_CurveRepresentation)& rep = c.Value();
+      if (!rep->IsCurveOnSurface()) continue;
+      const auto found = stored.find(rep->PCurve().get());
+      if (found == stored.end()) continue;
+      double first3d, last3d;
+      TopLoc_Location location3d;
+      Handle(Geom_Curve) curve3d = BRep_Tool::Curve(edge, location3d, first3d, last3d);
+      if (curve3d != found->second.curve3d || !location3d.IsEqual(found->second.location3d) ||
+          first3d != found->second.first3d || last3d != found->second.last3d)
+        return false;
+      // The representation's own range, as CurveOnSurface returns it.
+      double f, l;
+      Handle(BRep_GCurve)::DownCast(rep)->Range(f, l);
+      if (f != found->second.first || l != found->second.last) return false;
+    }
+  }
+  return true;
+}
+
+// The pcurves the fixing of `jobs` stored and kept.
+std::vector<Handle(Geom2d_Curve)> KeptPcurves(const std::vector<FaceJob*>& jobs) {
+  std::vector<Handle(Geom2d_Curve)> kept;
+  for (const FaceJob* job : jobs)
+    for (const auto& [address, pcurve] : job->stored) kept.push_back(pcurve.curve);
+  return kept;
+}
+
 void FixFace(FaceJob* job) {
   const UnitFactors& units = job->item->units;
   const TopoDS_Face local = TopoDS::Face(job->local);
@@ -1183,6 +1243,13 @@ void FixFace(FaceJob* job) {
   fix->Init(job->local);
   fix->Perform();
   job->healed = job->context->Apply(job->local);
+  // Kept on the fixed copy, whose edges the merged item takes over: the shell stages and
+  // BRepLib::EncodeRegularity ask for them again, and the stored curve is the one they would
+  // project. Removed as before where the fixing changed one in place.
+  if (Unchanged(stored, job->healed)) {
+    job->stored = stored;
+    return;
+  }
   if (!job->healed.IsNull() && job->healed.ShapeType() == TopAbs_FACE)
     UnstorePlanePcurves(TopoDS::Face(job->healed), stored);
   UnstorePlanePcurves(local, stored);
@@ -1481,7 +1548,7 @@ class Merger {
 void FinishItem(BrepItem* item, const TopoDS_Shape& merged,
                 const TopTools_DataMapOfShapeShape& merged_faces,
                 const TopTools_DataMapOfShapeShape& merged_edges_vertices,
-                const ParallelRunner& runner) {
+                const std::vector<FaceJob*>& jobs, const ParallelRunner& runner) {
   item->healed = merged;
   item->modified.Clear();
   Handle(ShapeFix_Shape) fix = new ShapeFix_Shape;
@@ -1498,11 +1565,16 @@ void FinishItem(BrepItem* item, const TopoDS_Shape& merged,
   // its context empty.
   TopoDS_Shape result = merged;
   if (!ShellAndSolidStagesWithoutChange(merged, runner)) {
+    // OCCT's own stages read stored pcurves only in places: they run as OCCT's reader runs them.
+    RemovePcurves(merged, KeptPcurves(jobs));
     fix->Perform();
     result = fix->Shape();
   }
   if (!result.IsNull()) {
-    if (!SameParameterInParallel(result, runner)) ShapeFix::SameParameter(result, Standard_False);
+    if (!SameParameterInParallel(result, runner)) {
+      RemovePcurves(result, KeptPcurves(jobs));
+      ShapeFix::SameParameter(result, Standard_False);
+    }
     // The edge tool works through the shape's context, as after ShapeFix_Face has run.
     Handle(ShapeFix_Edge) edge_tool = fix->FixEdgeTool();
     edge_tool->SetContext(fix->Context());
@@ -1532,6 +1604,28 @@ void FinishItem(BrepItem* item, const TopoDS_Shape& merged,
 }
 
 }  // namespace
+
+void RemovePcurves(const TopoDS_Shape& shape, const std::vector<Handle(Geom2d_Curve)>& pcurves) {
+  if (pcurves.empty() || shape.IsNull()) return;
+  std::unordered_set<const Geom2d_Curve*> remove;
+  for (const Handle(Geom2d_Curve) & pcurve : pcurves) remove.insert(pcurve.get());
+  TopTools_IndexedMapOfShape edges;
+  TopExp::MapShapes(shape, TopAbs_EDGE, edges);
+  for (int i = 1; i <= edges.Extent(); ++i) {
+    Handle(BRep_TEdge) te = Handle(BRep_TEdge)::DownCast(edges(i).TShape());
+    if (te.IsNull()) continue;
+    BRep_ListOfCurveRepresentation& curves = te->ChangeCurves();
+    for (BRep_ListIteratorOfListOfCurveRepresentation c(curves); c.More();) {
+      const Handle(BRep_CurveRepresentation)& rep = c.Value();
+      if (rep->IsCurveOnSurface() && !rep->IsCurveOnClosedSurface() &&
+          remove.count(rep->PCurve().get()) > 0) {
+        curves.Remove(c);
+      } else {
+        c.Next();
+      }
+    }
+  }
+}
 
 HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
                     const std::function<bool()>& stop) {
@@ -1615,7 +1709,7 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
             OCC_CATCH_SIGNALS
             Merger merger(item_jobs[i], shared[i]);
             TopoDS_Shape merged = merger.Rebuild(item->raw);
-            FinishItem(item, merged, merger.faces(), merger.RawToMerged(), runner);
+            FinishItem(item, merged, merger.faces(), merger.RawToMerged(), item_jobs[i], runner);
             ++parallel;
             return;
           } catch (...) {
@@ -1626,6 +1720,8 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
       Partition::kOnePerTask);
   stats.finish_seconds = seconds();
   stats.items_face_parallel = parallel.load();
+  for (const auto& job : jobs)
+    for (const auto& [address, pcurve] : job->stored) stats.kept_pcurves.push_back(pcurve.curve);
   return stats;
 }
 

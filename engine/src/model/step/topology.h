@@ -5,6 +5,7 @@
 // parameters (projections of the vertices on the curve), the file's pcurves where OCCT takes
 // them, the same wire and face orientations. Then each item is healed with the ShapeFix calls
 // and settings of OCCT's reader (XSAlgo_AlgoContainer::ProcessShape without a resource file).
+#include <Geom2d_Curve.hxx>
 #include <TopTools_DataMapOfShapeShape.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
@@ -84,9 +85,17 @@ struct HealStats {
   std::string refused;          ///< why the first other item was not, e.g. "shared edge's curve"
   double face_seconds = 0;      ///< the parallel face fixing
   double finish_seconds = 0;    ///< merging, the shell and solid stages, and HealItem fallbacks
+  /// Pcurves on planes the fixing stored and left on the healed items (OCCT projects them on
+  /// demand and stores none): RemovePcurves takes them off once the last stage that reads them
+  /// has run.
+  std::vector<Handle(Geom2d_Curve)> kept_pcurves;
 };
 HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
                     const std::function<bool()>& stop);
+
+/// Removes from every edge of `shape` the curve-on-surface representations whose pcurve is one
+/// of `pcurves`.
+void RemovePcurves(const TopoDS_Shape& shape, const std::vector<Handle(Geom2d_Curve)>& pcurves);
 
 /// Initialises, once per process, the OCCT globals BuildItem and HealItem use (the shape
 /// healing algorithm containers, lazily built planes), so HealItem may run in parallel.

@@ -1344,6 +1344,9 @@ Translated Translator::Run() {
     root_shapes.push_back(shape);
   }
   if (root_shapes.empty()) ThrowBroken("the STEP translator could not transfer the shapes");
+  // The plane pcurves the healing kept for the stages above go, as OCCT's reader stores none:
+  // the document and its binary round trip then hold OCCT's B-rep to the last bit.
+  for (const TopoDS_Shape& shape : root_shapes) RemovePcurves(shape, heal_stats_.kept_pcurves);
   out.stage_seconds.emplace_back("regularity", Since(stage));
 
   stage = Clock::now();
