@@ -174,6 +174,16 @@ std::string BrepReason(double deviation, double gap, double tolerance, double mi
   return text;
 }
 
+std::string StuckFoldReason(int64_t folds, int64_t over) {
+  char text[240];
+  std::snprintf(text, sizeof(text),
+                "some triangles could not be refined to the criteria without folding: %lld of the "
+                "%lld over them kept their fold through %d splits in a row (as where the "
+                "surface's normal reverses inside the face)",
+                static_cast<long long>(folds), static_cast<long long>(over), kFoldRun);
+  return text;
+}
+
 FaceSurfaces::FaceSurfaces(int face_count) : exact_(face_count), nurbs_(face_count) {}
 FaceSurfaces::~FaceSurfaces() = default;
 
@@ -293,7 +303,7 @@ class FaceRun {
                                          &start);
       if (status_.ok()) {
         UnfoldInitialMesh(&start, *surface_, domain_.scale_u, domain_.scale_v);
-        KeepIfBetter(&start, 0, RetryCap(), false);
+        KeepIfBetter(&start, 0, RetryCap(start.TriangleCount()), false);
       } else if (!Stopping()) {
         status_ = Status::Ok();  // the triangulation that worked before stands
       }
@@ -559,6 +569,8 @@ class FaceRun {
       f_.reason = "stopped at the per-face triangle cap";
     else if (deviation > 0 && (gap > deviation || coarse))
       f_.reason = BrepReason(deviation, gap, tolerance, missed ? stats_.max_deviation : 0);
+    else if (missed && stats_.stuck_folds > 0)
+      f_.reason = StuckFoldReason(stats_.stuck_folds, stats_.over);
     else if (missed)
       f_.reason = "some triangles could not be refined to the criteria without folding";
   }
@@ -577,12 +589,14 @@ class FaceRun {
     f_ = Failed(std::move(f_), reason);
     return false;
   }
-  // A retry of a stuck face may take this many times the triangles it has (a face whose normal
-  // flips inside, SSO-8's twisted B-spline patches, issue 35, refined again from itself toward
-  // the 20 M cap for minutes); one that reaches the cap is not kept (KeepIfBetter).
-  int64_t RetryCap() const {
-    return std::min<int64_t>(job_.max_triangles,
-                             kRetryCap * std::max<int64_t>(mesh_.TriangleCount(), kRetryMin));
+  // A retry of a stuck face may take this many times the triangles it has, or its own start has
+  // (a face whose normal flips inside, SSO-8's twisted B-spline patches, issue 35, refined again
+  // from itself toward the 20 M cap for minutes); one that reaches the cap is not kept
+  // (KeepIfBetter). A stuck refinement that stopped early (kFoldRun) does not starve a start
+  // larger than its result.
+  int64_t RetryCap(int64_t start_triangles = 0) const {
+    const int64_t base = std::max<int64_t>({mesh_.TriangleCount(), start_triangles, kRetryMin});
+    return std::min<int64_t>(job_.max_triangles, kRetryCap * base);
   }
   // Refinement ended within its budget but over the criteria.
   bool Stuck() const {

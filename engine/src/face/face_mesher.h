@@ -61,6 +61,10 @@ struct FaceJob {
 /// reason says so as well.
 std::string BrepReason(double deviation, double gap, double tolerance, double missed);
 
+/// A face's reason when refinement left `over` triangles over the criteria, `folds` of them
+/// folded after kFoldRun splits in a row each handed the fold on (RefineStats::stuck_folds).
+std::string StuckFoldReason(int64_t folds, int64_t over);
+
 /// Meshes face `face_id` of the model. Never throws: OCCT failures and bad loops come back as a
 /// kFailed FaceMesh with the reason. Boundary nodes keep their B-rep classification in `refs`
 /// (one per FaceMesh node) for assembly.

@@ -148,17 +148,24 @@ void Refiner::DropLastNode() {
 std::vector<int> Refiner::Apply(const std::vector<int>& cavity, const std::vector<Tri>& tris,
                                 const Candidate& cand, Phase phase) {
   // Generation: how many splits a triangle descends from (flips and collapses keep it).
-  int gen = 0;
-  for (int t : cavity) gen = std::max(gen, static_cast<int>(generation_[t]));
-  if (phase == Phase::kRefine && tris.size() > cavity.size()) gen = std::min(gen + 1, 255);
+  // Fold run: how many splits in a row made folded triangles down to a folded one (0 unfolded).
+  int gen = 0, fold_run = 0;
+  for (int t : cavity) {
+    gen = std::max(gen, static_cast<int>(generation_[t]));
+    if (measure_[t].agreement <= 0) fold_run = std::max(fold_run, static_cast<int>(fold_run_[t]));
+  }
+  if (phase == Phase::kRefine && tris.size() > cavity.size())
+    gen = std::min(gen + 1, 255), fold_run = std::min(fold_run + 1, 255);
   std::vector<int> ids = ReplaceCavity(&mesh_, cavity, tris);
   if (measure_.size() < mesh_.tri.size()) {
     measure_.resize(mesh_.tri.size());
     stamp_.resize(mesh_.tri.size(), 0);
     generation_.resize(mesh_.tri.size(), 0);
+    fold_run_.resize(mesh_.tri.size(), 0);
   }
-  for (int id : ids) generation_[id] = static_cast<uint8_t>(gen);
   for (size_t k = 0; k < ids.size(); ++k) {
+    generation_[ids[k]] = static_cast<uint8_t>(gen);
+    fold_run_[ids[k]] = static_cast<uint8_t>(cand.measures[k].agreement <= 0 ? fold_run : 0);
     measure_[ids[k]] = cand.measures[k];
     ++stamp_[ids[k]];
     if (phase == Phase::kRefine && cand.measures[k].violation > 1) Push(ids[k]);

@@ -118,6 +118,8 @@ class Refiner {
   // --- Refinement (refiner_split.cpp). SplitTriangle tries its strategies in turn, the first that
   // applies and succeeds wins: RealignPoleFan, SplitForLength, SplitSliver, SplitAtAreaOptimum,
   // SplitAnyEdge. Each takes the triangle's corners (uv, p: FoldCorners).
+  // A fold that kFoldRun splits in a row handed on to a child: no split removes it.
+  bool StuckFold(int t) const;
   bool SplitTriangle(int t, SplitMode mode);
   bool RealignPoleFan(int t);
   bool RealignPole(int p);
@@ -165,7 +167,9 @@ class Refiner {
   std::vector<TriangleMeasure> measure_;
   std::vector<uint32_t> stamp_;
   std::vector<uint8_t> generation_;  // per triangle: how many splits it descends from
-  double face_diagonal_ = 0;         // of the box of the nodes RefineToCriteria starts from
+  // Per triangle: how many splits in a row made folded triangles down to it (0 unfolded).
+  std::vector<uint8_t> fold_run_;
+  double face_diagonal_ = 0;  // of the box of the nodes RefineToCriteria starts from
   std::priority_queue<std::tuple<double, int, uint32_t>> queue_;
   std::vector<int> fan_ring_, fan_nodes_, link_ring_, link_nodes_;  // BestCollapse's scratch
   std::vector<Tri> collapse_tris_;

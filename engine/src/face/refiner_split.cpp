@@ -25,6 +25,7 @@ Status Refiner::RefineToCriteria(int64_t max_triangles, int settle_rounds) {
   measure_.resize(mesh_.tri.size());
   stamp_.assign(mesh_.tri.size(), 0);
   generation_.assign(mesh_.tri.size(), 0);
+  fold_run_.assign(mesh_.tri.size(), 0);
   Vec3 lo = mesh_.xyz.empty() ? Vec3{0, 0, 0} : mesh_.xyz[0], hi = lo;
   for (const Vec3& x : mesh_.xyz) {
     lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
@@ -74,6 +75,7 @@ Status Refiner::SplitViolating(int64_t max_triangles) {
           !(measure_[t].max_length > kLargeAtCap * face_diagonal_))
         continue;
       if (generation_[t] >= kSmallFoldGeneration && SmallFold(measure_[t], criteria_)) continue;
+      if (StuckFold(t)) continue;
       if (!SplitTriangle(t, mode) && reshape && reshapes > 0 && ReshapeByFlip(t)) --reshapes;
     }
     queue_ = {};
@@ -189,6 +191,8 @@ Status Refiner::Verify(int64_t max_triangles) {
   }
   return Status::Ok();
 }
+
+bool Refiner::StuckFold(int t) const { return fold_run_[t] >= kFoldRun; }
 
 bool Refiner::RealignPole(int p) {
   std::vector<int> cavity, added;
@@ -544,9 +548,11 @@ void Refiner::Legalize(int node) {
 void Refiner::Finish() {
   stats_.max_violation = 0;
   stats_.max_deviation = 0;
+  stats_.over = stats_.stuck_folds = 0;
   stats_.deviation.assign(mesh_.tri.size(), 0.0);
   for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
     if (!mesh_.alive[t]) continue;
+    if (measure_[t].violation > 1) ++stats_.over, stats_.stuck_folds += StuckFold(t);
     stats_.max_violation = std::max(stats_.max_violation, measure_[t].violation);
     stats_.max_deviation = std::max(stats_.max_deviation, measure_[t].deviation);
     stats_.deviation[t] = measure_[t].deviation;

@@ -170,6 +170,49 @@ TEST(RefineTest, StandingFinIsRefinedAway) {
   EXPECT_LE(f.OutputTriangles(), 2 * n + 4);
 }
 
+// A bilinear patch twisted into a bow-tie, as SSO-4's B-spline faces are (issue 35): its
+// u-direction edges run against each other (P10 - P00 = (1, 0, 0), P11 - P01 = (-0.3, 0, 0)),
+// so Su vanishes on the line v = 1 / 1.3, which maps to one point, and the normal Su x Sv
+// reverses across it. Every triangle across that line folds, and so does a child of each split.
+class BowTie final : public Surface {
+ public:
+  Vec3 Point(double u, double v) override {
+    const Vec3 p00{0, 0, 0}, p10{1, 0, 0}, p01{0.65, 1, 0.3}, p11{0.35, 1, 0.3};
+    return (1 - v) * ((1 - u) * p00 + u * p10) + v * ((1 - u) * p01 + u * p11);
+  }
+};
+
+TEST(RefineTest, AFoldThatSplitsHandOnIsLeftAndCounted) {
+  AnalyticFace f;
+  f.surface = std::make_unique<BowTie>();
+  EdgeGridCriteria edge;
+  edge.max_sagitta = 1e-3;
+  FaceCriteria face;
+  face.max_deviation = 1e-3;
+  MeshRectangle(&f, 0, 1, 0, 1, false, edge, face);
+  // Splitting on along the line would go kMaxGeneration deep (25,840 triangles): the fold that
+  // splits hand on is left, and counted.
+  EXPECT_LE(f.mesh.TriangleCount(), 400);
+  EXPECT_GT(f.stats.max_violation, 1.0);
+  EXPECT_GT(f.stats.stuck_folds, 0);
+  EXPECT_LE(f.stats.stuck_folds, f.stats.over);
+  // The folds lie along the line: every triangle left folded has corners on both sides of it or
+  // touches it within a split's reach.
+  const double line = 1 / 1.3;
+  for (int t = 0; t < static_cast<int>(f.mesh.tri.size()); ++t) {
+    if (!f.mesh.alive[t]) continue;
+    double lo = 1, hi = 0;
+    for (int v : f.mesh.tri[t])
+      lo = std::min(lo, f.mesh.uv[v].y), hi = std::max(hi, f.mesh.uv[v].y);
+    Vec2 uv[3];
+    Vec3 p[3], n[3];
+    f.mesh.FoldCorners(f.mesh.tri[t], uv, p, n);
+    if (TriangleAgreement(uv, p, n) > 0) continue;
+    EXPECT_LE(lo, line + 0.25) << t;
+    EXPECT_GE(hi, line - 0.25) << t;
+  }
+}
+
 TEST(RefineTest, SphereNearTheoreticalMinimum) {
   // Unit sphere at 1e-3 of its bbox diagonal: the optimum is 2 * 2.418 / delta triangles.
   const double delta = 1e-3 * 2 * std::sqrt(3.0);
