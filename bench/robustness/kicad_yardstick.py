@@ -128,9 +128,15 @@ TRIAGE = {
         "dS/du vanishes; the refinement splits there without end (face 20 alone, planar: 256 "
         "triangles, 2.4 s CPU, 'could not be refined to the criteria without folding'; the "
         "whole file: 109 s CPU on one thread and not done). perf: Measure 23%, "
-        "CachedSurface::Point 15%, OcctSurface::Point 7%, TriangleAgreement 7%."),
+        "CachedSurface::Point 15%, OcctSurface::Point 7%, TriangleAgreement 7%. Since 220b18e "
+        "(kFoldRun: a fold that 5 splits in a row handed on is left unsplit and reported) every "
+        "face meshes: 1,172 triangles, 192 inverted, hausdorff_rel 8.7e-4, 7.0 s CPU, where "
+        "b53f6d1's build made 65,352 triangles with 30,062 inverted in 17.2 s CPU (rdmesh mesh "
+        "FILE --threads 1 --json, mesh_cpu_seconds; meshbench eval)."),
     "SSO-8_6.7x9.8mm": (
-        "the bow-tie bilinear patches of SSO-4 (face 50: the normal flips at v = 0.79)."),
+        "the bow-tie bilinear patches of SSO-4 (face 50: the normal flips at v = 0.79). Since "
+        "220b18e: 1,800 triangles, 482 inverted, 2.5 s CPU (b53f6d1's build: 34,548, 15,994, "
+        "8.3 s)."),
     "L_CommonMode_Toroid_Vertical_L19.3mm": (
         "face 220 (cylinder) is bounded by two edges with the same two ends that lie on each "
         "other within edge 439's tolerance 0.0039: the face has no width, and both chords are "
@@ -144,19 +150,22 @@ TRIAGE = {
         "0.89x). The yardstick over-estimates here."),
     "Crystal_HC33-U_Horizontal": (
         "faces 3 and 12 (surfaces of revolution) hold 66 and 84 inverted triangles: the "
-        "refinement's 'could not be refined to the criteria without folding' (face/refiner)."),
+        "refinement's 'could not be refined to the criteria without folding' (face/refiner). "
+        "Since 220b18e: 1,166 triangles, 122 inverted (b53f6d1's build: 1,268, 150)."),
     "Fuseholder_Schurter_0031.7701": (
         "face 132's edges lie up to 0.1 off its surface (tolerance 1e-7): 6 inverted triangles, "
-        "hausdorff 0.051 (6x); rdmesh reports the B-rep."),
+        "hausdorff 0.051 (6x); rdmesh reports the B-rep. Since 220b18e: 4 inverted (b53f6d1's "
+        "build: 6)."),
     "L_CommonMode_Toroid_Vertical_L39.4mm": (
         "faces 118 and 334, of 2e-5 mm2 each, hold 3 inverted triangles each (folding, "
         "face/refiner)."),
     "L_CommonMode_Toroid_Vertical_L41.9mm": (
-        "as the L39.4: tiny faces the refinement could not refine without folding."),
+        "as the L39.4: tiny faces the refinement could not refine without folding. Since "
+        "220b18e: 6 inverted (b53f6d1's build: 7)."),
     "TO-8-2": "face 12 (revolution): 1 inverted triangle (folding, face/refiner).",
     "ESP-WROOM-02": (
         "faces 209, 211 and 219 (1e-3 mm2 each): 1 inverted triangle each (folding, "
-        "face/refiner)."),
+        "face/refiner). Since 220b18e: no inverted triangle (clean; b53f6d1's build: 3)."),
 }
 
 
@@ -174,7 +183,8 @@ CAUSES = {
     "timed out": (
         "SSO-4 and SSO-8 (Package_SO, Clearance8mm): faces that are bilinear B-spline patches "
         "twisted into a bow-tie, whose normal flips inside the face; the refinement splits there "
-        "without end (face/refiner, not changed here)."),
+        "without end (since 220b18e a fold that 5 splits in a row handed on is left unsplit: "
+        "SSO-4 1,172 triangles in 7.0 s CPU, 192 inverted)."),
     "failed face": (
         "toroid L19.3: a cylinder face of no width, two edges with the same ends lying on each "
         "other within a 0.0039 tolerance (face_domain drops them as a pinch)."),

@@ -19,8 +19,8 @@ constexpr double kLargeAtCap = 0.1;
 constexpr int kSmallFoldGeneration = 6;
 // A fold that this many splits in a row each handed on to a child is left unsplit: splits do
 // not remove it (SSO-4's bow-tie B-splines, whose normal reverses inside, went kMaxGeneration deep
-// along the fold line: 16,168 triangles on a face of 0.14 mm2). 4 cost an inverted triangle on
-// ESP-WROOM-02 and on the toroid L39.4 (docs/TUNING.md).
+// along the fold line: 16,168 triangles on a face of 0.14 mm2). 4 left ESP-WROOM-02 3 inverted
+// triangles and the toroid L39.4 7, where 5 leaves 0 and 6 (docs/TUNING.md).
 constexpr int kFoldRun = 5;
 // The final check (Refiner::Verify) splits in at most this many rounds.
 constexpr int kVerifyRounds = 6;
