@@ -32,9 +32,9 @@ struct RefineStats {
   int64_t refined_triangles = 0;  ///< triangles after the splits, before the improvement passes
   double max_violation = 0;       ///< worst triangle afterwards (<= 1: all criteria met)
   int64_t over = 0;               ///< triangles over the criteria afterwards
-  /// Of those, folded ones whose fold kFoldRun splits in a row each handed on to a child, left
-  /// unsplit: splits do not remove it (where the surface's normal reverses inside, a twisted
-  /// patch, or where a first triangulation fans across a turn, which a retry's start avoids).
+  /// Of those, folded ones left unsplit since splits hand their fold on (Refiner::StuckFold:
+  /// where the surface's normal reverses inside, a twisted patch, or where a first
+  /// triangulation fans across a turn, which a retry's start avoids).
   int64_t stuck_folds = 0;
   double max_deviation = 0;  ///< worst estimated deviation afterwards, model units
   /// 1 per working-mesh triangle (dead ones 0): its estimated deviation afterwards, model units.

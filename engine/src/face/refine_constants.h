@@ -17,10 +17,11 @@ constexpr int kMaxGeneration = 24;
 constexpr double kLargeAtCap = 0.1;
 // A fold shorter than the deviation and within it is not split below this depth (no progress).
 constexpr int kSmallFoldGeneration = 6;
-// A fold that this many splits in a row each handed on to a child is left unsplit: splits do
-// not remove it (SSO-4's bow-tie B-splines, whose normal reverses inside, went kMaxGeneration deep
-// along the fold line: 16,168 triangles on a face of 0.14 mm2). 4 left ESP-WROOM-02 3 inverted
-// triangles and the toroid L39.4 7, where 5 leaves 0 and 6 (docs/TUNING.md).
+// A fold that this many splits in a row each handed on to a child is left unsplit (as is one
+// across which the surface's normal jumps, after one): splits do not remove it (SSO-4's bow-tie
+// B-splines, whose normal reverses inside, went kMaxGeneration deep along the fold line: 16,168
+// triangles on a face of 0.14 mm2). 4 left ESP-WROOM-02 3 inverted triangles and the toroid
+// L39.4 7, where 5 leaves 0 and 6 (docs/TUNING.md).
 constexpr int kFoldRun = 5;
 // The final check (Refiner::Verify) splits in at most this many rounds.
 constexpr int kVerifyRounds = 6;

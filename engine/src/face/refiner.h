@@ -118,7 +118,9 @@ class Refiner {
   // --- Refinement (refiner_split.cpp). SplitTriangle tries its strategies in turn, the first that
   // applies and succeeds wins: RealignPoleFan, SplitForLength, SplitSliver, SplitAtAreaOptimum,
   // SplitAnyEdge. Each takes the triangle's corners (uv, p: FoldCorners).
-  // A fold that kFoldRun splits in a row handed on to a child: no split removes it.
+  // A fold that no split removes: one that kFoldRun splits in a row handed on to a child, or,
+  // after one such split, one across which the surface's own normal jumps between two corners
+  // (a twisted patch's fold line). A first triangle's fold stays to split (it may be too big).
   bool StuckFold(int t) const;
   bool SplitTriangle(int t, SplitMode mode);
   bool RealignPoleFan(int t);

@@ -19,6 +19,18 @@ bool SmallFold(const TriangleMeasure& m, const FaceCriteria& c) {
          !(c.rd_tolerance > 0 && m.rd > c.rd_tolerance);
 }
 
+// Whether the surface's normal reverses (jumps) somewhere on the segment from a to b, whose
+// normal at a is na and points apart from b's: bisected down to where it passes perpendicular to
+// na, a normal that turns is about the same on both sides; one that reverses (where Su x Sv
+// vanishes: a twisted patch's fold line) still points apart.
+bool NormalReverses(Surface& s, Vec2 a, Vec2 b, Vec3 na) {
+  for (int k = 0; k < 48; ++k) {
+    const Vec2 m = 0.5 * (a + b);
+    (Dot(s.Normal(m.x, m.y), na) > 0 ? a : b) = m;
+  }
+  return Dot(s.Normal(a.x, a.y), s.Normal(b.x, b.y)) < 0;
+}
+
 }  // namespace
 
 Status Refiner::RefineToCriteria(int64_t max_triangles, int settle_rounds) {
@@ -192,7 +204,18 @@ Status Refiner::Verify(int64_t max_triangles) {
   return Status::Ok();
 }
 
-bool Refiner::StuckFold(int t) const { return fold_run_[t] >= kFoldRun; }
+bool Refiner::StuckFold(int t) const {
+  if (fold_run_[t] >= kFoldRun) return true;
+  if (fold_run_[t] < 1) return false;
+  Vec2 uv[3];
+  Vec3 p[3], n[3];
+  mesh_.FoldCorners(mesh_.tri[t], uv, p, n);
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    if (Dot(n[i], n[j]) < 0 && NormalReverses(surface_, uv[i], uv[j], n[i])) return true;
+  }
+  return false;
+}
 
 bool Refiner::RealignPole(int p) {
   std::vector<int> cavity, added;
