@@ -132,11 +132,13 @@ TRIAGE = {
         "(kFoldRun: a fold that 5 splits in a row handed on is left unsplit and reported) every "
         "face meshes: 1,172 triangles, 192 inverted, hausdorff_rel 8.7e-4, 7.0 s CPU, where "
         "b53f6d1's build made 65,352 triangles with 30,062 inverted in 17.2 s CPU (rdmesh mesh "
-        "FILE --threads 1 --json, mesh_cpu_seconds; meshbench eval)."),
+        "FILE --threads 1 --json, mesh_cpu_seconds; meshbench eval); since b59805c (a fold "
+        "across which the normal jumps is left after one split) 1,000 triangles, 166 "
+        "inverted, 7.9 s CPU."),
     "SSO-8_6.7x9.8mm": (
         "the bow-tie bilinear patches of SSO-4 (face 50: the normal flips at v = 0.79). Since "
         "220b18e: 1,800 triangles, 482 inverted, 2.5 s CPU (b53f6d1's build: 34,548, 15,994, "
-        "8.3 s)."),
+        "8.3 s); since b59805c 1,632 triangles, 408 inverted, 3.1 s CPU."),
     "L_CommonMode_Toroid_Vertical_L19.3mm": (
         "face 220 (cylinder) is bounded by two edges with the same two ends that lie on each "
         "other within edge 439's tolerance 0.0039: the face has no width, and both chords are "
@@ -151,7 +153,9 @@ TRIAGE = {
     "Crystal_HC33-U_Horizontal": (
         "faces 3 and 12 (surfaces of revolution) hold 66 and 84 inverted triangles: the "
         "refinement's 'could not be refined to the criteria without folding' (face/refiner). "
-        "Since 220b18e: 1,166 triangles, 122 inverted (b53f6d1's build: 1,268, 150)."),
+        "Since 220b18e: 1,166 triangles, 122 inverted (b53f6d1's build: 1,268, 150); since "
+        "b59805c (a fold across which the normal jumps is left after one split) 838 "
+        "triangles, 23 inverted (the _1EP_style2: 834, 23)."),
     "Fuseholder_Schurter_0031.7701": (
         "face 132's edges lie up to 0.1 off its surface (tolerance 1e-7): 6 inverted triangles, "
         "hausdorff 0.051 (6x); rdmesh reports the B-rep. Since 220b18e: 4 inverted (b53f6d1's "
@@ -183,8 +187,9 @@ CAUSES = {
     "timed out": (
         "SSO-4 and SSO-8 (Package_SO, Clearance8mm): faces that are bilinear B-spline patches "
         "twisted into a bow-tie, whose normal flips inside the face; the refinement splits there "
-        "without end (since 220b18e a fold that 5 splits in a row handed on is left unsplit: "
-        "SSO-4 1,172 triangles in 7.0 s CPU, 192 inverted)."),
+        "without end (since 220b18e a fold that 5 splits in a row handed on is left unsplit, "
+        "since b59805c one across which the normal jumps after one split: SSO-4 1,000 "
+        "triangles in 7.9 s CPU, 166 inverted)."),
     "failed face": (
         "toroid L19.3: a cylinder face of no width, two edges with the same ends lying on each "
         "other within a 0.0039 tolerance (face_domain drops them as a pinch)."),
