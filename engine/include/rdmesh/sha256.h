@@ -6,7 +6,7 @@
 
 namespace rdmesh {
 
-/// SHA-256 of `bytes` as 64 lower-case hex digits (OpenSSL's EVP digest). Thread-safe.
+/// SHA-256 of `bytes` (FIPS 180-4) as 64 lower-case hex digits. Thread-safe.
 std::string Sha256Hex(std::string_view bytes);
 
 /// True for a string of exactly 64 lower-case hex digits.
