@@ -52,12 +52,15 @@ Result<const OcctReaderApi*> LoadOcctReaders() {
   void* handle = error ? nullptr : dlopen(module.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (handle == nullptr) {
     const char* why = dlerror();
+    const std::string reason = error ? error.message() : why != nullptr ? why : "unknown";
+    // The loader maps the module into the address space: under a memory limit (rdmesh batch
+    // --memory-limit, a container's) that is where the memory runs out.
+    if (reason.find("failed to map segment") != std::string::npos)
+      return Status(StatusCode::kResourceExhausted,
+                    "out of memory: cannot map OCCT's STEP and IGES readers (" + module + ")");
     return Status(StatusCode::kInternal,
                   "OCCT's STEP and IGES readers are not available: cannot load " + module + " (" +
-                      (error            ? error.message()
-                       : why != nullptr ? why
-                                        : "unknown") +
-                      ")");
+                      reason + ")");
   }
   using Entry = const OcctReaderApi* (*)();
   auto entry = reinterpret_cast<Entry>(dlsym(handle, "rdmesh_occt_reader_api"));
