@@ -1163,29 +1163,11 @@ StoredPcurves StorePlanePcurves(const TopoDS_Face& face) {
   return stored;
 }
 
-// Removes from the edges of `face` (the fixed copy) the pcurves StorePlanePcurves stored, also
-// where the fixing copied an edge: OCCT's reader leaves none on a plane.
-void UnstorePlanePcurves(const TopoDS_Face& face, const StoredPcurves& stored) {
-  if (stored.empty()) return;
-  BRep_Builder builder;
-  TopLoc_Location location;
-  const Handle(Geom_Surface)& surface = BRep_Tool::Surface(face, location);
-  for (TopExp_Explorer it(face, TopAbs_EDGE); it.More(); it.Next()) {
-    const TopoDS_Edge& edge = TopoDS::Edge(it.Current());
-    Handle(BRep_TEdge) te = Handle(BRep_TEdge)::DownCast(edge.TShape());
-    if (te.IsNull()) continue;
-    const TopLoc_Location on = location.Predivided(edge.Location());
-    BRep_ListOfCurveRepresentation& curves = te->ChangeCurves();
-    for (BRep_ListIteratorOfListOfCurveRepresentation c(curves); c.More();) {
-      const Handle(BRep_CurveRepresentation)& rep = c.Value();
-      if (rep->IsCurveOnSurface(surface, on) && !rep->IsCurveOnClosedSurface() &&
-          stored.count(rep->PCurve().get()) > 0) {
-        curves.Remove(c);
-      } else {
-        c.Next();
-      }
-    }
-  }
+// The curves of `stored`.
+std::vector<Handle(Geom2d_Curve)> Curves(const StoredPcurves& stored) {
+  std::vector<Handle(Geom2d_Curve)> curves;
+  for (const auto& [address, pcurve] : stored) curves.push_back(pcurve.curve);
+  return curves;
 }
 
 // Whether every stored pcurve still reads as when it was stored (ShapeFix reverses or shifts
@@ -1223,10 +1205,13 @@ bool Unchanged(const StoredPcurves& stored, const TopoDS_Shape& face) {
 }
 
 // The pcurves the fixing of `jobs` stored and kept.
-std::vector<Handle(Geom2d_Curve)> KeptPcurves(const std::vector<FaceJob*>& jobs) {
+template <typename Jobs>
+std::vector<Handle(Geom2d_Curve)> KeptPcurves(const Jobs& jobs) {
   std::vector<Handle(Geom2d_Curve)> kept;
-  for (const FaceJob* job : jobs)
-    for (const auto& [address, pcurve] : job->stored) kept.push_back(pcurve.curve);
+  for (const auto& job : jobs) {
+    const std::vector<Handle(Geom2d_Curve)> curves = Curves(job->stored);
+    kept.insert(kept.end(), curves.begin(), curves.end());
+  }
   return kept;
 }
 
@@ -1250,9 +1235,9 @@ void FixFace(FaceJob* job) {
     job->stored = stored;
     return;
   }
-  if (!job->healed.IsNull() && job->healed.ShapeType() == TopAbs_FACE)
-    UnstorePlanePcurves(TopoDS::Face(job->healed), stored);
-  UnstorePlanePcurves(local, stored);
+  // OCCT's reader leaves none on a plane: off the fixed copy, also where it copied an edge.
+  RemovePcurves(job->healed, Curves(stored));
+  RemovePcurves(local, Curves(stored));
 }
 
 // The vertex of `edge` with orientation `orientation` (FORWARD or REVERSED), or null.
@@ -1720,8 +1705,7 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
       Partition::kOnePerTask);
   stats.finish_seconds = seconds();
   stats.items_face_parallel = parallel.load();
-  for (const auto& job : jobs)
-    for (const auto& [address, pcurve] : job->stored) stats.kept_pcurves.push_back(pcurve.curve);
+  stats.kept_pcurves = KeptPcurves(jobs);
   return stats;
 }
 
