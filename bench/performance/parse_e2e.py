@@ -606,12 +606,14 @@ def main(argv=None):
     for binary in [args.rdmesh, args.plain_runner] + ([args.rdmeshd] if args.service else []):
         if not os.access(binary, os.X_OK):
             raise SystemExit("no executable at %s" % binary)
-    # rdmesh loads OCCT's STEP reader (its fallback) from a module beside it: a copied binary
-    # needs the module copied too, or a file that falls back fails instead of being timed.
-    module = os.path.join(os.path.dirname(args.rdmesh), "rdmesh_occt_readers.so")
-    if not os.path.isfile(module):
-        print("parse_e2e: warning: no %s beside rdmesh: files its own reader passes to OCCT's "
-              "will fail" % module, file=sys.stderr)
+    # rdmesh loads OCCT's STEP reader (its fallback) and OCCT's document framework (assemblies)
+    # from modules beside it: a copied binary needs them copied too, or the files that need them
+    # fail instead of being timed.
+    for module in ("rdmesh_occt_readers.so", "rdmesh_occt_xcaf.so"):
+        module = os.path.join(os.path.dirname(args.rdmesh), module)
+        if not os.path.isfile(module):
+            print("parse_e2e: warning: no %s beside rdmesh: the files that need it will fail"
+                  % module, file=sys.stderr)
 
     files = []
     notes = []

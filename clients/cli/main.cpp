@@ -171,6 +171,9 @@ int RunMeshCommand(const CommonFlags& flags, const MeshFlags& mesh_flags, const 
   Context context;
   g_interrupt_context = &context;
   context.SetTimeout(options->timeout_seconds);
+  // Only these writers and the store carry names and colours: without them a plain STEP file
+  // loads without OCCT's document framework (rdmesh_occt_xcaf.so stays unloaded).
+  context.set_keep_document(extension == ".glb" || extension == ".obj" || !flags.cache_dir.empty());
   // The engine stops itself at the deadline; should a stage miss it, end the process anyway.
   Watchdog watchdog(options->timeout_seconds > 0 ? options->timeout_seconds + kWatchdogGrace : 0,
                     [&flags, &options] {

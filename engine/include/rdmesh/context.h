@@ -54,6 +54,15 @@ class Context {
   /// Ok, or kCancelled / kDeadlineExceeded.
   Status StopStatus() const;
 
+  /// Whether a load keeps the model's XCAF document (names, colours and the assembly tree, which
+  /// the .glb and .obj writers and the model store carry). On by default. Off, a STEP file whose
+  /// product structure is plain (no assembly, every root a named shape of its own) loads without
+  /// OCCT's document framework: the same shape, ids and ModelInfo, but no document. The rdmesh
+  /// CLI turns it off for the formats that carry no colours, where loading that framework was
+  /// half of the process's start-up.
+  void set_keep_document(bool keep) { keep_document_ = keep; }
+  bool keep_document() const { return keep_document_; }
+
   void set_progress_callback(ProgressFn fn) { progress_ = std::move(fn); }
   void set_face_callback(FaceDoneFn fn) { face_done_ = std::move(fn); }
 
@@ -63,6 +72,7 @@ class Context {
 
  private:
   std::atomic<bool> cancelled_{false};
+  bool keep_document_ = true;
   std::atomic<int64_t> deadline_ns_{0};  // steady_clock ns since epoch; 0 = none
   ProgressFn progress_;
   FaceDoneFn face_done_;

@@ -207,6 +207,10 @@ Result<std::shared_ptr<const Model>> BuildModel(ReadShape read, ModelFormat form
       model->max_edge_tolerance =
           std::max(model->max_edge_tolerance, BRep_Tool::Tolerance(model->edge(id)));
     model->info = ComputeModelInfo(*model, /*bounding_box=*/derived == nullptr);
+    if (model->doc.IsNull() && read.instances >= 0) {
+      model->info.instances = read.instances;
+      model->info.part_names = read.part_names;
+    }
     read.stages.emplace_back("info", SecondsSince(step_start));
     if (derived != nullptr) {
       model->info.bbox = derived->bbox;
@@ -263,6 +267,8 @@ Result<CanonicalModel> ParseCanonical(const std::string& bytes, ModelFormat form
                       InnermostReason(reread.status().message()) + ")");
   }
   reread->length_unit = read->length_unit;
+  reread->instances = read->instances;
+  reread->part_names = std::move(read->part_names);
   reread->unit_scale_mm = read->unit_scale_mm;
   reread->stages = std::move(read->stages);
   reread->reader = read->reader;

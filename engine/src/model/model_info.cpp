@@ -3,17 +3,12 @@
 #include <BRepBndLib.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
-#include <TCollection_AsciiString.hxx>
-#include <TDF_LabelSequence.hxx>
-#include <TDataStd_Name.hxx>
 #include <TopExp.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Iterator.hxx>
-#include <XCAFDoc_DocumentTool.hxx>
-#include <XCAFDoc_ShapeTool.hxx>
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -24,6 +19,7 @@
 #include "core/parallel.h"
 #include "geometry/surface_type.h"
 #include "model/face_boxes.h"
+#include "model/xcaf_api.h"
 
 namespace rdmesh {
 
@@ -51,30 +47,6 @@ bool IsClosed(const TopoDS_Shape& shape) {
     if (uses != 2) return false;
   }
   return true;
-}
-
-std::string LabelName(const TDF_Label& label) {
-  Handle(TDataStd_Name) name;
-  if (!label.FindAttribute(TDataStd_Name::GetID(), name)) return "";
-  return TCollection_AsciiString(name->Get()).ToCString();  // UTF-8
-}
-
-// Walks the assembly tree from `label`: counts placed leaf parts and collects part names.
-void WalkParts(const TDF_Label& label, int* instances, std::vector<std::string>* names,
-               std::set<std::string>* seen) {
-  TDF_Label part = label;
-  TDF_Label referred;
-  if (XCAFDoc_ShapeTool::IsReference(label) && XCAFDoc_ShapeTool::GetReferredShape(label, referred))
-    part = referred;
-  if (XCAFDoc_ShapeTool::IsAssembly(part)) {
-    TDF_LabelSequence components;
-    XCAFDoc_ShapeTool::GetComponents(part, components);
-    for (const TDF_Label& component : components) WalkParts(component, instances, names, seen);
-    return;
-  }
-  ++*instances;
-  std::string name = LabelName(part);
-  if (!name.empty() && seen->insert(name).second) names->push_back(name);
 }
 
 // Without a document: every non-compound shape under the top compounds is one instance.
@@ -274,12 +246,9 @@ ModelInfo ComputeModelInfo(const Model& model, bool bounding_box) {
   }
 
   if (!model.doc.IsNull()) {
-    Handle(XCAFDoc_ShapeTool) shape_tool = XCAFDoc_DocumentTool::ShapeTool(model.doc->Main());
-    TDF_LabelSequence free_labels;
-    shape_tool->GetFreeShapes(free_labels);
-    std::set<std::string> seen;
-    for (const TDF_Label& label : free_labels)
-      WalkParts(label, &info.instances, &info.part_names, &seen);
+    // A document has been built or read in this process, so its framework is at hand.
+    Result<const XcafApi*> xcaf = Xcaf();
+    if (xcaf.ok()) (*xcaf)->walk_parts(model.doc, &info.instances, &info.part_names);
   } else {
     info.instances = CountLeafShapes(model.shape);
   }

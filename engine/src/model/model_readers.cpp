@@ -4,7 +4,6 @@
 
 #include "model/model_readers.h"
 
-#include <dlfcn.h>
 #include <unistd.h>
 
 #include <BRepTools.hxx>
@@ -31,6 +30,7 @@
 #include <streambuf>
 #include <vector>
 
+#include "model/engine_module.h"
 #include "model/occt_readers.h"
 #include "model/reader_support.h"
 #include "model/step/part21.h"
@@ -46,29 +46,11 @@ namespace {
 
 // The module of OCCT's readers: rdmesh_occt_readers.so in the executable's folder.
 Result<const OcctReaderApi*> LoadOcctReaders() {
-  std::error_code error;
-  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
-  const std::string module = (self.parent_path() / "rdmesh_occt_readers.so").string();
-  void* handle = error ? nullptr : dlopen(module.c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (handle == nullptr) {
-    const char* why = dlerror();
-    const std::string reason = error ? error.message() : why != nullptr ? why : "unknown";
-    // The loader maps the module into the address space: under a memory limit (rdmesh batch
-    // --memory-limit, a container's) that is where the memory runs out.
-    if (reason.find("failed to map segment") != std::string::npos)
-      return Status(StatusCode::kResourceExhausted,
-                    "out of memory: cannot map OCCT's STEP and IGES readers (" + module + ")");
-    return Status(StatusCode::kInternal,
-                  "OCCT's STEP and IGES readers are not available: cannot load " + module + " (" +
-                      reason + ")");
-  }
-  using Entry = const OcctReaderApi* (*)();
-  auto entry = reinterpret_cast<Entry>(dlsym(handle, "rdmesh_occt_reader_api"));
-  const OcctReaderApi* api = entry != nullptr ? entry() : nullptr;
-  if (api == nullptr || api->version != kOcctReaderApiVersion)
-    return Status(StatusCode::kInternal, "OCCT's STEP and IGES readers are not available: " +
-                                             module + " is not the module of this build of rdmesh");
-  return api;
+  Result<const void*> module =
+      LoadEngineModule("rdmesh_occt_readers.so", "rdmesh_occt_reader_api",
+                       "OCCT's STEP and IGES readers", kOcctReaderApiVersion);
+  if (!module.ok()) return module.status();
+  return static_cast<const OcctReaderApi*>(*module);
 }
 
 // OCCT's translators share global state (static parameter tables, the session): one at a time.

@@ -17,7 +17,7 @@ namespace rdmesh {
 
 /// Changes whenever OcctReaderApi or what it passes changes: a module of another build is
 /// refused rather than called.
-constexpr int kOcctReaderApiVersion = 1;
+constexpr int kOcctReaderApiVersion = 2;
 
 /// The readers. Each runs under the caller's ReaderMutex, OCCT fault handlers and
 /// OCC_CATCH_SIGNALS (ReadModelBytes); OCCT exceptions leave them as thrown.

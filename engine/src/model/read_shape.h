@@ -24,6 +24,11 @@ struct ReadShape {
   std::string reader;
   /// Why rdmesh's own STEP reader passed the file to OCCT's ("" when it did not).
   std::string reader_note;
+  /// Where a reader knew them without building a document (doc null): the placed part instances
+  /// and the parts' distinct names, as the document would give them (ModelInfo::instances and
+  /// part_names); instances < 0 when not known.
+  int instances = -1;
+  std::vector<std::string> part_names;
 };
 
 /// The document's free shapes (with their locations) as one compound: the model's shape.

@@ -7,10 +7,9 @@
 #include <string>
 
 #include "model/model.h"
+#include "model/xcaf_api.h"
 #include "rdmesh/engine.h"
-#include "writers/gltf_writer.h"
 #include "writers/msh_writer.h"
-#include "writers/obj_writer.h"
 #include "writers/output_file.h"
 #include "writers/ply_writer.h"
 #include "writers/stl_writer.h"
@@ -61,10 +60,15 @@ Status Dispatch(const Model& model, const MeshResult& result, const std::vector<
   std::string ext = Extension(path);
   if (ext == ".msh") return WriteMsh(model, result, edges, options.msh_parametric, path);
   if (ext == ".stl") return WriteStl(result, path);
-  if (ext == ".obj") return WriteObj(model, result, edges, path);
+  if (ext == ".obj" || ext == ".glb") {
+    // Both write through the model's XCAF document (names, colours, the assembly tree).
+    Result<const XcafApi*> xcaf = Xcaf();
+    if (!xcaf.ok()) return xcaf.status();
+    if (ext == ".obj") return (*xcaf)->write_obj(model, result, edges, path);
+    return (*xcaf)->write_glb(model, result, edges, options.compress, path);
+  }
   if (ext == ".ply") return WritePly(result, path);
   if (ext == ".vtu") return WriteVtu(result, path);
-  if (ext == ".glb") return WriteGlb(model, result, edges, options.compress, path);
   std::string supported;
   for (const std::string& format : SupportedOutputFormats())
     supported += (supported.empty() ? "" : ", ") + format;

@@ -409,6 +409,43 @@ ChildRun RunProgram(const std::vector<std::string>& argv, std::chrono::milliseco
   return run;
 }
 
+// A load that keeps no document (Context::set_keep_document(false), the rdmesh CLI's for
+// formats without colours) gives the same model where the STEP file's structure is plain: the
+// same shape to the bit (the same mesh), ids and ModelInfo, but no document.
+TEST(LoadWithoutDocumentTest, IsTheSameModel) {
+  int lean = 0;
+  for (const std::string name :
+       {"axom_sliced_cylinder.step", "cq_red_cube_blue_cylinder.step", "nist_mbe_pmi_11.stp",
+        "pyocc_eight_cyl.stp", "kicad/LED_D3.0mm_Horizontal_O1.27mm_Z2.0mm.step"}) {
+    SCOPED_TRACE(name);
+    Context keep, drop;
+    drop.set_keep_document(false);
+    Result<std::shared_ptr<const Model>> with = LoadModel(DataPath(name), &keep);
+    Result<std::shared_ptr<const Model>> without = LoadModel(DataPath(name), &drop);
+    ASSERT_TRUE(with.ok()) << with.status().ToString();
+    ASSERT_TRUE(without.ok()) << without.status().ToString();
+    EXPECT_FALSE((*with)->doc.IsNull());
+    if ((*without)->doc.IsNull()) ++lean;
+    const ModelInfo& a = (*with)->info;
+    const ModelInfo& b = (*without)->info;
+    EXPECT_EQ(a.faces, b.faces);
+    EXPECT_EQ(a.edges, b.edges);
+    EXPECT_EQ(a.instances, b.instances);
+    EXPECT_EQ(a.part_names, b.part_names);
+    EXPECT_EQ(a.bbox, b.bbox);
+    EXPECT_EQ((*with)->face_area, (*without)->face_area);
+    MeshOptions options;
+    options.max_deviation_rel = 1e-3;
+    Result<MeshResult> ma = MeshModel(**with, options);
+    Result<MeshResult> mb = MeshModel(**without, options);
+    ASSERT_TRUE(ma.ok() && mb.ok());
+    EXPECT_EQ(ma->mesh.xyz, mb->mesh.xyz);
+    EXPECT_EQ(ma->mesh.triangles, mb->mesh.triangles);
+  }
+  // The bundled files with a plain structure (all but the assembly) load without one.
+  EXPECT_GE(lean, 4);
+}
+
 TEST(RunProgramTest, ReportsOutputCrashAndHang) {
   ChildRun ok = RunProgram({"/bin/sh", "-c", "echo fine"}, std::chrono::seconds(30));
   EXPECT_EQ(ok.death, "");

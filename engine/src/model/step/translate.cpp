@@ -18,19 +18,10 @@
 #include <Standard_Failure.hxx>
 #include <Standard_OutOfMemory.hxx>
 #include <TCollection_ExtendedString.hxx>
-#include <TDF_Label.hxx>
-#include <TDF_LabelSequence.hxx>
-#include <TDataStd_Name.hxx>
 #include <TopLoc_Location.hxx>
 #include <TopTools_MapOfShape.hxx>
 #include <TopoDS_Compound.hxx>
 #include <TopoDS_Iterator.hxx>
-#include <XCAFApp_Application.hxx>
-#include <XCAFDoc_ColorTool.hxx>
-#include <XCAFDoc_DataMapOfShapeLabel.hxx>
-#include <XCAFDoc_DocumentTool.hxx>
-#include <XCAFDoc_LayerTool.hxx>
-#include <XCAFDoc_ShapeTool.hxx>
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -48,10 +39,12 @@
 
 #include "core/parallel.h"
 #include "model/length_unit.h"
+#include "model/step/document_plan.h"
 #include "model/step/entities.h"
 #include "model/step/finish.h"
 #include "model/step/geometry.h"
 #include "model/step/topology.h"
+#include "model/xcaf_api.h"
 
 namespace rdmesh::step {
 
@@ -159,6 +152,11 @@ void ApplyTransformation(TopoDS_Shape* shape, const gp_Trsf& trsf) {
   shape->Move(TopLoc_Location(trsf));
 }
 
+// The engine cannot go on (its document framework cannot be loaded): the status, as is.
+struct Failed {
+  Status status;
+};
+
 class Translator {
  public:
   Translator(const File& file, const TranslateOptions& options, const Context* context)
@@ -201,12 +199,11 @@ class Translator {
   // --- Items
   void BuildItems(std::vector<std::pair<std::string, double>>* stage_seconds);
 
-  // --- Document (STEPCAFControl_Reader::Transfer)
-  void BuildDocument(const std::vector<TopoDS_Shape>& root_shapes, ReadShape* read);
-  TDF_Label AddShape(const TopoDS_Shape& shape, const Handle(XCAFDoc_ShapeTool) & tool);
-  void ReadColors(const Handle(TDocStd_Document) & doc);
-  void ReadNames(const Handle(TDocStd_Document) & doc);
-  void ReadLayers(const Handle(TDocStd_Document) & doc);
+  // --- Document (STEPCAFControl_Reader::Transfer, up to the document: document_plan.h)
+  void PlanDocument(const std::vector<TopoDS_Shape>& root_shapes, DocumentPlan* plan);
+  void PlanColors(DocumentPlan* plan);
+  void PlanNames(DocumentPlan* plan);
+  void PlanLayers(DocumentPlan* plan);
   bool DecodeColour(uint64_t colour, uint64_t from, Quantity_Color* color);
 
   void CheckStop() const {
@@ -233,10 +230,6 @@ class Translator {
   std::unordered_map<uint64_t, TopoDS_Shape> results_;  // the transfer process's bindings
 
   HealStats heal_stats_;
-
-  // Document state
-  TopTools_MapOfShape new_shapes_;
-  XCAFDoc_DataMapOfShapeLabel shape_labels_;  // STEPCAFControl_Reader::myMap
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -947,54 +940,7 @@ void Translator::BuildItems(std::vector<std::pair<std::string, double>>* stage_s
 // ---------------------------------------------------------------------------------------------
 // Document
 
-TDF_Label Translator::AddShape(const TopoDS_Shape& shape, const Handle(XCAFDoc_ShapeTool) & tool) {
-  if (const TDF_Label* found = shape_labels_.Seek(shape)) return *found;
-  if (!shape.Location().IsIdentity()) {
-    TopoDS_Shape unlocated = shape;
-    unlocated.Location(TopLoc_Location());
-    AddShape(unlocated, tool);
-    TDF_Label label = tool->AddShape(shape, Standard_False);
-    shape_labels_.Bind(shape, label);
-    return label;
-  }
-  if (shape.ShapeType() != TopAbs_COMPOUND) {
-    TDF_Label label = tool->AddShape(shape, Standard_False);
-    shape_labels_.Bind(shape, label);
-    return label;
-  }
-  bool is_assembly = false;
-  for (TopoDS_Iterator it(shape); it.More() && !is_assembly; it.Next()) {
-    TopoDS_Shape child = it.Value();
-    child.Location(TopLoc_Location());
-    if (new_shapes_.Contains(child)) is_assembly = true;
-  }
-  if (!is_assembly) {
-    TDF_Label label = tool->AddShape(shape, Standard_False);
-    shape_labels_.Bind(shape, label);
-    return label;
-  }
-  TDF_Label label = tool->NewShape();
-  for (TopoDS_Iterator it(shape); it.More(); it.Next()) {
-    TopoDS_Shape child = it.Value();
-    child.Location(TopLoc_Location());
-    TDF_Label child_label = AddShape(child, tool);
-    if (child_label.IsNull()) continue;
-    TDF_Label instance = tool->AddComponent(label, child_label, it.Value().Location());
-    if (!shape_labels_.IsBound(it.Value())) shape_labels_.Bind(it.Value(), instance);
-  }
-  shape_labels_.Bind(shape, label);
-  return label;
-}
-
-void Translator::ReadNames(const Handle(TDocStd_Document) & doc) {
-  Handle(XCAFDoc_ShapeTool) tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
-  auto label_of = [&](const TopoDS_Shape& shape) {
-    TDF_Label label;
-    if (shape.IsNull()) return label;
-    if (const TDF_Label* found = shape_labels_.Seek(shape)) return *found;
-    tool->Search(shape, label, Standard_True, Standard_True, Standard_False);
-    return label;
-  };
+void Translator::PlanNames(DocumentPlan* plan) {
   auto useful = [](const std::string& s) {
     return s.find_first_not_of(' ') != std::string::npos;  // UsefullLength() > 0
   };
@@ -1021,9 +967,8 @@ void Translator::ReadNames(const Handle(TDocStd_Document) & doc) {
         named = true;
       }
       (void)named;
-      TDF_Label label = label_of(Bound(instance.id));
-      if (label.IsNull()) continue;
-      TDataStd_Name::Set(label, TCollection_ExtendedString(name.c_str(), Standard_True));
+      const TopoDS_Shape shape = Bound(instance.id);
+      if (!shape.IsNull()) plan->names.push_back({shape, name});
     } else if (kind == Kind::kProductDefinition) {
       // PRODUCT_DEFINITION(id, description, formation, frame_of_reference) ->
       // PRODUCT_DEFINITION_FORMATION(id, description, of_product) -> PRODUCT(id, name, ...)
@@ -1039,9 +984,8 @@ void Translator::ReadNames(const Handle(TDocStd_Document) & doc) {
         const std::string product_name = p.String(1);
         name = useful(product_name) ? product_name : p.String(0);
       }
-      TDF_Label label = label_of(Bound(instance.id));
-      if (label.IsNull()) continue;
-      TDataStd_Name::Set(label, TCollection_ExtendedString(name.c_str(), Standard_True));
+      const TopoDS_Shape shape = Bound(instance.id);
+      if (!shape.IsNull()) plan->names.push_back({shape, name});
     }
   }
 }
@@ -1049,7 +993,7 @@ void Translator::ReadNames(const Handle(TDocStd_Document) & doc) {
 // STEPCAFControl_Reader::ReadLayers: each PRESENTATION_LAYER_ASSIGNMENT whose items were
 // transferred becomes a layer (invisible when an INVISIBILITY names it) holding their labels;
 // an item that is a sub-shape of a part gets a sub-shape label.
-void Translator::ReadLayers(const Handle(TDocStd_Document) & doc) {
+void Translator::PlanLayers(DocumentPlan* plan) {
   std::unordered_set<uint64_t> invisible;
   bool any = false;
   for (uint32_t index : order_) {
@@ -1061,28 +1005,20 @@ void Translator::ReadLayers(const Handle(TDocStd_Document) & doc) {
       if (inv.Item(items, i).kind == ParamKind::kRef) invisible.insert(inv.RefItem(items, i));
   }
   if (!any) return;
-  Handle(XCAFDoc_ShapeTool) tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
-  Handle(XCAFDoc_LayerTool) layers = XCAFDoc_DocumentTool::LayerTool(doc->Main());
   for (uint32_t index : order_) {
     if (kinds_[index] != Kind::kLayerAssignment) continue;
     // (name, description, assigned_items)
     const Instance& instance = file_.instances[index];
     Entity layer = entities_.Simple(instance);
     if (layer.IsUnset(2)) continue;
-    const bool visible = invisible.count(instance.id) == 0;
-    const TCollection_ExtendedString name(layer.String(0).c_str(), Standard_True);
-    TDF_Label layer_label;
+    PlannedLayer planned{layer.String(0), invisible.count(instance.id) == 0, {}};
     const Param& items = layer.List(2);
     for (uint32_t i = 0; i < items.count; ++i) {
       if (layer.Item(items, i).kind != ParamKind::kRef) continue;
       const TopoDS_Shape shape = Bound(layer.RefItem(items, i));
-      if (shape.IsNull()) continue;
-      TDF_Label label;
-      if (!tool->Search(shape, label, Standard_True, Standard_True, Standard_True)) continue;
-      if (layer_label.IsNull()) layer_label = layers->AddLayer(name, visible);
-      layers->SetLayer(label, layer_label);
+      if (!shape.IsNull()) planned.items.push_back(shape);
     }
-    if (!layer_label.IsNull()) layers->SetVisibility(layer_label, visible);
+    if (!planned.items.empty()) plan->layers.push_back(std::move(planned));
   }
 }
 
@@ -1120,7 +1056,7 @@ bool Translator::DecodeColour(uint64_t colour_id, uint64_t from, Quantity_Color*
 
 // STEPCAFControl_Reader::ReadColors, for styles without a context (component styles and SHUOs
 // are not reproduced).
-void Translator::ReadColors(const Handle(TDocStd_Document) & doc) {
+void Translator::PlanColors(DocumentPlan* plan) {
   std::vector<uint64_t> styles;
   std::unordered_set<uint64_t> seen;
   std::unordered_set<uint64_t> invisible;
@@ -1147,8 +1083,7 @@ void Translator::ReadColors(const Handle(TDocStd_Document) & doc) {
     }
   }
   if (styles.empty()) return;
-  Handle(XCAFDoc_ColorTool) colors = XCAFDoc_DocumentTool::ColorTool(doc->Main());
-  Handle(XCAFDoc_ShapeTool) tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+  plan->has_styles = true;
   for (uint64_t style_id : styles) {
     // STYLED_ITEM(name, styles, item)
     Entity style = entities_.Simple(entities_.Get(style_id, 0));
@@ -1230,8 +1165,9 @@ void Translator::ReadColors(const Handle(TDocStd_Document) & doc) {
     TopoDS_Shape shape = Bound(item_id);
     if (shape.IsNull()) continue;
     if (!surf && !bound && !curve && !render && visible) continue;
-    TDF_Label label;
-    const bool found = tool->SearchUsingMap(shape, label, Standard_False, Standard_True);
+    PlannedStyle planned;
+    planned.shape = shape;
+    planned.visible = visible;
     if (surf || bound || curve || render) {
       Quantity_Color scol, bcol, ccol, rcol;
       Quantity_ColorRGBA full;
@@ -1245,50 +1181,16 @@ void Translator::ReadColors(const Handle(TDocStd_Document) & doc) {
         DecodeColour(*render, style_id, &rcol);
         full = Quantity_ColorRGBA(rcol, static_cast<float>(1.0f - transparency));
       }
-      auto set = [&](const TDF_Label& l) {
-        if (surf || render) colors->SetColor(l, full, XCAFDoc_ColorSurf);
-        if (bound) colors->SetColor(l, bcol, XCAFDoc_ColorCurv);
-        if (curve) colors->SetColor(l, ccol, XCAFDoc_ColorCurv);
-      };
-      if (found) {
-        set(label);
-      } else {
-        for (TopoDS_Iterator it(shape); it.More(); it.Next()) {
-          TDF_Label sub;
-          if (tool->SearchUsingMap(it.Value(), sub, Standard_False, Standard_True)) set(sub);
-        }
-      }
+      if (surf || render) planned.surface = full;
+      if (bound) planned.boundary = bcol;
+      if (curve) planned.curve = ccol;
     }
-    if (!visible && found) colors->SetVisibility(label, Standard_False);
+    plan->styles.push_back(std::move(planned));
   }
-  colors->ReverseChainsOfTreeNodes();
-  // Colours of assemblies go to their components without colours of their own.
-  std::function<void(const TDF_Label&)> propagate = [&](const TDF_Label& root) {
-    TDF_LabelSequence components;
-    if (root.IsEqual(tool->Label()))
-      tool->GetFreeShapes(components);
-    else
-      tool->GetComponents(root, components);
-    for (TDF_LabelSequence::Iterator it(components); it.More(); it.Next()) {
-      TDF_Label original = it.Value();
-      tool->GetReferredShape(original, original);
-      TDF_Label color_label, dummy;
-      for (int type = 1; type <= 3; ++type) {
-        if (colors->GetColor(root, static_cast<XCAFDoc_ColorType>(type), color_label) &&
-            !colors->GetColor(original, static_cast<XCAFDoc_ColorType>(type), dummy))
-          colors->SetColor(original, color_label, static_cast<XCAFDoc_ColorType>(type));
-      }
-      if (!colors->IsVisible(root)) colors->SetVisibility(original, Standard_False);
-      if (tool->IsAssembly(original)) propagate(original);
-    }
-  };
-  propagate(tool->Label());
 }
 
-void Translator::BuildDocument(const std::vector<TopoDS_Shape>& root_shapes, ReadShape* read) {
-  Handle(TDocStd_Document) doc = new TDocStd_Document("MDTV-XCAF");
-  XCAFApp_Application::GetApplication()->InitDocument(doc);
-  XCAFDoc_DocumentTool::SetLengthUnit(doc, 1.0, UnitsMethods_LengthUnit_Millimeter);
+void Translator::PlanDocument(const std::vector<TopoDS_Shape>& root_shapes, DocumentPlan* plan) {
+  plan->roots = root_shapes;
   // FillShapesMap: the roots' shapes and the components of their compounds, unlocated.
   TopTools_MapOfShape shapes;
   std::function<void(const TopoDS_Shape&)> fill = [&](const TopoDS_Shape& s) {
@@ -1303,16 +1205,12 @@ void Translator::BuildDocument(const std::vector<TopoDS_Shape>& root_shapes, Rea
     const Kind kind = kinds_[index];
     if (kind != Kind::kProductDefinition && kind != Kind::kShapeRepresentation) continue;
     TopoDS_Shape shape = Bound(file_.instances[index].id);
-    if (!shape.IsNull() && shapes.Contains(shape)) new_shapes_.Add(shape);
+    if (!shape.IsNull() && shapes.Contains(shape)) plan->new_shapes.Add(shape);
   }
-  Handle(XCAFDoc_ShapeTool) tool = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
-  for (const TopoDS_Shape& shape : root_shapes) AddShape(shape, tool);
-  ReadColors(doc);
-  ReadNames(doc);
-  ReadLayers(doc);
-  tool->UpdateAssemblies();
-  read->doc = doc;
-  read->shape = FreeShapesCompound(doc);
+  // The document's order: colours, names, layers.
+  PlanColors(plan);
+  PlanNames(plan);
+  PlanLayers(plan);
 }
 
 Translated Translator::Run() {
@@ -1351,7 +1249,15 @@ Translated Translator::Run() {
 
   stage = Clock::now();
   std::tie(out.read.length_unit, out.read.unit_scale_mm) = LengthUnitOf(LengthUnitName());
-  BuildDocument(root_shapes, &out.read);
+  DocumentPlan plan;
+  PlanDocument(root_shapes, &plan);
+  // The document only where the run keeps it, or where it decides the shape and parts.
+  const bool keep = context_ == nullptr || context_->keep_document();
+  if (keep || !LeanShape(plan, &out.read)) {
+    Result<const XcafApi*> xcaf = Xcaf();
+    if (!xcaf.ok()) throw Failed{xcaf.status()};
+    (*xcaf)->build_step_document(plan, &out.read);
+  }
   out.stage_seconds.emplace_back("document", Since(stage));
   out.items = static_cast<int>(items_.size());
   out.items_healed_by_face = heal_stats_.items_face_parallel;
@@ -1375,6 +1281,8 @@ Result<Translated> TranslateStep(const File& file, const TranslateOptions& optio
     return out;
   } catch (const Broken& broken) {
     return Status(StatusCode::kParseError, broken.what);
+  } catch (const Failed& failed) {
+    return failed.status;
   } catch (const std::bad_alloc&) {
     return Status(StatusCode::kResourceExhausted, "out of memory");
   } catch (const Standard_OutOfMemory&) {

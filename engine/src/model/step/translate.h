@@ -2,9 +2,10 @@
 // A parsed STEP file (part21.h) translated into what OCCT 7.6's STEPCAFControl_Reader gives the
 // engine (model/read_shape.h): the B-rep, scaled to millimetres, healed with the same ShapeFix
 // calls and settings as OCCT's reader, and an XCAF document with the same assembly structure,
-// names and colours. The B-rep's faces, edges, surfaces and parameterisations are those OCCT
-// builds (the same Geom objects from the same numbers, the same edge and vertex sharing), so a
-// file this translates meshes as it does through OCCT. Solids are healed in parallel.
+// names and colours (built from document_plan.h's plan where the run keeps a document). The
+// B-rep's faces, edges, surfaces and parameterisations are those OCCT builds (the same Geom
+// objects from the same numbers, the same edge and vertex sharing), so a file this translates
+// meshes as it does through OCCT. Solids are healed in parallel.
 //
 // What it covers: the geometry and topology of advanced B-reps (MANIFOLD_SOLID_BREP,
 // BREP_WITH_VOIDS, SHELL_BASED_SURFACE_MODEL), SI and conversion-based length units, products,
