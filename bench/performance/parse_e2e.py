@@ -17,7 +17,8 @@ The ratio is rdmesh's median over the plain runner's (below 1: rdmesh is faster)
 
 Also: the load alone (rdmesh's load_seconds against the plain runner's read + transfer), the fixed
 cost per process (`rdmesh --help` against `plain_runner` with no arguments, and seven pairs on the
-sampled file nearest 50 faces), and with --service the first Mesh after UploadModel through a
+sampled file nearest 50 faces), the load on one core (taskset -c 0) against two on the files with
+more than 200 faces, and with --service the first Mesh after UploadModel through a
 fresh rdmeshd against the plain runner on a few files. Writes the markdown table (--out) and
 every measurement as JSON (--json); --results-only re-renders the markdown from such a JSON file.
 """
@@ -272,6 +273,38 @@ def fixed_cost(args, env, work_dir, rows, pairs=7):
     return out
 
 
+def core_scaling(args, env, work_dir, rows, rounds, min_faces=200):
+    """The load on one core and on two (issue 34: at least 1.7x): every measured file with more
+    than `min_faces` faces, `rounds` alternating runs of `taskset -c 0 rdmesh mesh ...` and the
+    plain `rdmesh mesh ...`; per file the medians of load_seconds and of the whole wall."""
+    out = {"min_faces": min_faces, "rounds": rounds, "files": []}
+    if not shutil.which("taskset"):
+        out["error"] = "taskset is not installed (util-linux)"
+        return out
+    for row in rows:
+        if row["errors"] or not row.get("faces") or row["faces"] <= min_faces:
+            continue
+        target = work_dir / "cores.msh"
+        base = rdmesh_command(args.rdmesh, row["file"], target)
+        runs = {1: [], 2: []}
+        for r in range(rounds):
+            for cores in ((1, 2) if r % 2 == 0 else (2, 1)):
+                command = (["taskset", "-c", "0"] if cores == 1 else []) + base
+                runs[cores].append(timed(command, env))
+                if target.exists():
+                    target.unlink()
+        entry = {"name": row["name"], "group": row["group"], "faces": row["faces"]}
+        for cores, samples in runs.items():
+            reports = [run["report"] for run in samples if run.get("report")]
+            entry["load_%d" % cores] = median_of(reports, "load_seconds")
+            entry["wall_%d" % cores] = statistics.median(run["wall"] for run in samples)
+        if entry["load_1"] and entry["load_2"]:
+            entry["load_speedup"] = entry["load_1"] / entry["load_2"]
+        entry["wall_speedup"] = entry["wall_1"] / entry["wall_2"]
+        out["files"].append(entry)
+    return out
+
+
 # -- the service ------------------------------------------------------------------------------
 
 def start_daemon(rdmeshd, log_path, env):
@@ -482,6 +515,32 @@ def render(results):
             L.append("| the same, CPU s | %s | %s | %s |" % (
                 fmt(small["rdmesh_cpu"]), fmt(small["plain_cpu"]),
                 fmt(small.get("cpu_ratio"), "%.2fx")))
+    cores = results.get("cores")
+    if cores:
+        L += ["", "### The load on one core and on two", ""]
+        if cores.get("error"):
+            L.append("Not measured: %s." % cores["error"])
+        else:
+            files = cores["files"]
+            L.append("Every measured file with more than %d faces: %d alternating runs of "
+                     "`taskset -c 0 rdmesh mesh ...` (one core) and `rdmesh mesh ...` (both); "
+                     "medians. The issue asks for a load at least 1.7x faster on two cores."
+                     % (cores["min_faces"], cores["rounds"]))
+            L += ["", "| files | n | load 1 core / 2 cores (geo. mean) | whole wall (geo. mean) "
+                  "| lowest load speed-up |", "|---|---:|---:|---:|---|"]
+            low = min(files, key=lambda f: f.get("load_speedup") or 99, default=None)
+            L.append("| > %d faces | %d | %s | %s | %s |" % (
+                cores["min_faces"], len(files),
+                fmt(geomean([f.get("load_speedup") for f in files]), "%.2fx"),
+                fmt(geomean([f.get("wall_speedup") for f in files]), "%.2fx"),
+                "%s %.2fx" % (low["name"], low["load_speedup"])
+                if low and low.get("load_speedup") else "-"))
+            L += ["", "| file | faces | load s, 1 core | load s, 2 cores | speed-up | wall "
+                  "speed-up |", "|---|---:|---:|---:|---:|---:|"]
+            for f in files:
+                L.append("| %s | %s | %s | %s | %s | %s |" % (
+                    f["name"], f["faces"], fmt(f.get("load_1")), fmt(f.get("load_2")),
+                    fmt(f.get("load_speedup"), "%.2fx"), fmt(f.get("wall_speedup"), "%.2fx")))
     service = results.get("service")
     if service:
         L += ["", "## The service: first Mesh after UploadModel", ""]
@@ -667,6 +726,7 @@ def main(argv=None):
         results["rows"] = rows
         results["summary"] = summarize(rows)
         results["fixed"] = fixed_cost(args, env, work_dir, rows)
+        results["cores"] = core_scaling(args, env, work_dir, rows, args.rounds)
         if args.service:
             results["service"] = measure_service(args, env, work_dir, rows, args.rounds)
     finally:
