@@ -39,35 +39,18 @@ bool ForkDisabled() {
   return value != nullptr && value[0] != '\0' && std::strcmp(value, "0") != 0;
 }
 
-// The child's last message: its exit code follows, and its output is flushed.
-constexpr char kFinished = 'X';
-
-// What the child said before it closed the pipe.
-struct ChildReport {
-  Phase phase = Phase::kLoading;  // the last phase entered
-  bool finished = false;          // it sent its exit code
-  int code = 0;
-};
-
-// Reads the child's messages until it closes the pipe: phase bytes, then kFinished and the code.
-ChildReport FollowChild(int fd) {
-  ChildReport report;
-  bool code_next = false;
+// Reads phase bytes until the child closes the pipe (it exits); returns the last one.
+Phase FollowPhases(int fd) {
+  Phase phase = Phase::kLoading;
   char bytes[64];
   for (;;) {
     ssize_t count = read(fd, bytes, sizeof(bytes));
-    if (count < 0 && errno == EINTR) continue;
-    if (count <= 0) return report;
-    for (ssize_t i = 0; i < count; ++i) {
-      if (code_next) {
-        report.code = static_cast<unsigned char>(bytes[i]);
-        report.finished = true;
-        code_next = false;
-      } else if (bytes[i] == kFinished) {
-        code_next = true;
-      } else {
-        report.phase = static_cast<Phase>(bytes[i]);
-      }
+    if (count > 0) {
+      phase = static_cast<Phase>(bytes[count - 1]);
+    } else if (count < 0 && errno == EINTR) {
+      continue;
+    } else {
+      return phase;
     }
   }
 }
@@ -107,14 +90,6 @@ int RunIsolated(const std::function<int()>& run,
     }
     g_phase_fd = pipe_fds[1];
     int code = run();
-    // With its output flushed, the child tells the parent its code: the parent returns it
-    // without waiting for the kernel to tear this process down (about 1 ms).
-    std::cout.flush();
-    std::cerr.flush();
-    std::fflush(nullptr);
-    const char finished[2] = {kFinished, static_cast<char>(code)};
-    ssize_t written = write(pipe_fds[1], finished, sizeof(finished));
-    (void)written;  // a parent that went away cannot be told
     close(pipe_fds[1]);
     g_phase_fd = -1;
     return code;
@@ -128,17 +103,13 @@ int RunIsolated(const std::function<int()>& run,
   for (size_t i = 0; i < std::size(kForwarded); ++i) sigaction(kForwarded[i], &forward, &saved[i]);
   sigprocmask(SIG_SETMASK, &saved_mask, nullptr);
 
-  const ChildReport report = FollowChild(pipe_fds[0]);
+  ChildDeath death{FollowPhases(pipe_fds[0]), 0, false};
   close(pipe_fds[0]);
-  ChildDeath death{report.phase, 0, false};
   int status = 0;
-  // A child that finished is not waited for: it only exits now, and the caller's process ends
-  // next (the kernel reaps it).
-  while (!report.finished && waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
   }
   g_child = 0;
   for (size_t i = 0; i < std::size(kForwarded); ++i) sigaction(kForwarded[i], &saved[i], nullptr);
-  if (report.finished) return report.code;
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   death.signal = WTERMSIG(status);
   death.interrupted = g_forwarded > 0;
