@@ -1,5 +1,6 @@
-"""OCCT's STEP and IGES readers in the rdmesh CLI: not linked in, but loaded from the module
-rdmesh_occt_readers.so beside the binary when a file needs them (engine/src/model/occt_readers.h).
+"""OCCT's STEP and IGES readers and OCCT's document framework in the rdmesh CLI: not linked in,
+but loaded from the modules rdmesh_occt_readers.so and rdmesh_occt_xcaf.so beside the binary when
+a run needs them (engine/src/model/occt_readers.h, xcaf_api.h).
 """
 
 import json
@@ -64,3 +65,31 @@ def test_iges_through_the_module(cli, tmp_path):
     run = _mesh(cli, "/usr/share/opencascade/data/iges/bearing.iges", tmp_path / "b.msh")
     assert run.returncode == 0, run.stderr
     assert _last_json(run.stdout)["triangles"] > 0
+
+
+def test_the_cli_does_not_load_the_document_framework_at_start(cli):
+    needed = subprocess.run(["readelf", "-d", str(cli)], capture_output=True, text=True,
+                            check=True).stdout
+    for toolkit in ("TKXCAF", "TKLCAF", "TKBinXCAF", "TKV3d", "TKService", "TKRWMesh"):
+        assert f"lib{toolkit}.so" not in needed
+    assert (cli.parent / "rdmesh_occt_xcaf.so").is_file()
+
+
+def test_a_plain_part_meshes_without_the_document_module(cli, data_dir, tmp_path):
+    # Only the readers' module beside it: a .msh of a plain part needs no document; a .glb keeps
+    # the part's names and colours, so it needs the module and says which.
+    alone = tmp_path / "alone" / "rdmesh"
+    alone.parent.mkdir()
+    shutil.copy2(cli, alone)
+    shutil.copy2(cli.parent / "rdmesh_occt_readers.so", alone.parent)
+    model = data_dir / "kicad" / "LED_D3.0mm_Horizontal_O1.27mm_Z2.0mm.step"
+    lean = _mesh(alone, model, tmp_path / "lean.msh")
+    assert lean.returncode == 0, lean.stderr
+    full = _mesh(cli, model, tmp_path / "full.msh", {"RDMESH_CACHE_DIR": str(tmp_path / "c")})
+    assert full.returncode == 0, full.stderr
+    # The same mesh as a load that keeps the document (the store's).
+    assert (tmp_path / "lean.msh").read_bytes() == (tmp_path / "full.msh").read_bytes()
+    glb = _mesh(alone, model, tmp_path / "x.glb")
+    assert glb.returncode == 3
+    assert "rdmesh_occt_xcaf.so" in glb.stderr
+    assert _last_json(glb.stdout)["error"]["code"] == "internal"

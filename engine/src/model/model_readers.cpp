@@ -212,8 +212,10 @@ Result<std::optional<ReadShape>> ReadStepOwn(const std::string& bytes, const Con
   Result<step::Translated> translated =
       step::TranslateStep(*file, step::TranslateOptions{}, context);
   if (context != nullptr && context->ShouldStop()) return context->StopStatus();
-  // Out of memory is no reason to try OCCT's reader, which would fail the same way, worse said.
-  if (!translated.ok() && translated.status().code() == StatusCode::kResourceExhausted)
+  // Out of memory is no reason to try OCCT's reader, which would fail the same way, worse said;
+  // nor is a module that cannot be loaded (kInternal: the document framework's, xcaf_api.h).
+  if (!translated.ok() && (translated.status().code() == StatusCode::kResourceExhausted ||
+                           translated.status().code() == StatusCode::kInternal))
     return translated.status();
   if (!translated.ok()) {
     *why = "translator: " + translated.status().message();
