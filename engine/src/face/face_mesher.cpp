@@ -294,7 +294,7 @@ class FaceRun {
     // getting anywhere): a first triangulation that follows the surface's turn. Not on a plane,
     // which does not turn: there it only costs seconds (four stuck planar faces of
     // BarrelJack_CUI_PJ-063AH took 13 s for the same mesh).
-    if (Stuck() && !surface_->planar) {
+    if (Stuck() && !surface_->planar && !StuckOnFolds()) {
       WorkMesh start;
       const size_t max_seeds =
           std::max<size_t>(kTurnStartMinSeeds, kTurnStartSeedFactor * domain_.uv.size());
@@ -310,7 +310,7 @@ class FaceRun {
     }
     // A fresh refiner counts every triangle as a first generation, whose splits may fold
     // children (kFoldingGenerations), which frees splits that the fold guard blocked.
-    for (int round = 0; round < kStuckRetries && Stuck(); ++round) {
+    for (int round = 0; round < kStuckRetries && Stuck() && !StuckOnFolds(); ++round) {
       WorkMesh again = mesh_;
       if (!KeepIfBetter(&again, 0, RetryCap(), false)) break;
     }
@@ -601,6 +601,14 @@ class FaceRun {
   // Refinement ended within its budget but over the criteria.
   bool Stuck() const {
     return status_.ok() && stats_.max_violation > 1.0 + 1e-9 && !stats_.budget_hit;
+  }
+  // Stuck on folds no start removes: nearly every triangle over the criteria (at least
+  // kStuckFoldsPatch of them) holds a fold that splits only hand on. A first triangulation's fan
+  // across a turn, which another start avoids, folds a few triangles; a twisted patch folds
+  // dozens (Crystal_HC33-U's faces of revolution: 36 of 36; SSO-8's bow-ties: 164 of 171), and
+  // another start only refines it again, to four times the triangles (0.7-1.1 s a face).
+  bool StuckOnFolds() const {
+    return Stuck() && stats_.over >= kStuckFoldsPatch && stats_.stuck_folds * 10 >= stats_.over * 9;
   }
   // Refines `candidate` (under `cap` triangles) and keeps it when it lowers the worst violation,
   // or with `ties` keeps it as bad (and, under a cap of its own, when it did not reach it).

@@ -58,6 +58,9 @@ constexpr int kSmoothEverywhereRounds = 1;
 // --- The face mesher's retries (face_mesher.cpp)
 // How many times a face left over its criteria is refined again from its own result.
 constexpr int kStuckRetries = 2;
+// Stuck folds from which a face is a twisted patch rather than a fan across a turn: its retries
+// are skipped (face_mesher.cpp, StuckOnFolds).
+constexpr int64_t kStuckFoldsPatch = 16;
 // A folded first triangulation's own refinement stops at this many times the triangles the
 // unfolded start's splits made (at least kFoldedStartMin).
 constexpr int64_t kFoldedStartCap = 4;
