@@ -30,6 +30,12 @@ Result<std::shared_ptr<const Model>> LoadModelFromBytes(const std::string& bytes
 /// Summary of a loaded model.
 ModelInfo GetModelInfo(const Model& model);
 
+/// Loads OCCT's document framework (names, colours and assembly trees: loads that keep the
+/// document, .glb and .obj output, the model store) into this process now, where the program was
+/// linked without it (the rdmesh CLI): processes forked afterwards inherit it instead of each
+/// loading it again (rdmesh batch). Ok at once where it is built in; else its loading error.
+Status LoadDocumentFramework();
+
 /// Meshes a model. Faces that fail are reported in MeshResult::faces and the rest still mesh;
 /// the Status is not ok only for bad options, cancellation or a deadline.
 /// Thread-safe: one Model may be meshed by several calls at once.

@@ -24,6 +24,7 @@
 #include "model/model_info.h"
 #include "model/model_payload.h"
 #include "model/model_readers.h"
+#include "model/xcaf_api.h"
 
 namespace rdmesh {
 
@@ -331,5 +332,10 @@ Result<std::shared_ptr<const Model>> LoadModelFromBytes(const std::string& bytes
 }
 
 ModelInfo GetModelInfo(const Model& model) { return model.info; }
+
+Status LoadDocumentFramework() {
+  Result<const XcafApi*> xcaf = Xcaf();
+  return xcaf.ok() ? Status::Ok() : xcaf.status();
+}
 
 }  // namespace rdmesh
