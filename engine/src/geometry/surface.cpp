@@ -22,6 +22,7 @@
 #include <gp_Pln.hxx>
 #include <gp_Pnt.hxx>
 #include <gp_Sphere.hxx>
+#include <gp_Torus.hxx>
 #include <gp_Vec.hxx>
 #include <memory>
 #include <unordered_map>
@@ -158,6 +159,15 @@ class OcctSurface final : public Surface {
         quadric = {Quadric::Kind::kSphere, ToVec(frame_[3]), ToVec(frame_[2]), radius_};
         v_trig_.resize(size_t{1} << kTrigBits);
         break;
+      case GeomAbs_Torus: {
+        gp_Torus torus = adaptor_.Torus();
+        frame(torus.Position());
+        radius_ = torus.MajorRadius();
+        minor_radius_ = torus.MinorRadius();
+        kind_ = Kind::kTorus;
+        v_trig_.resize(size_t{1} << kTrigBits);
+        break;
+      }
       default:
         break;
     }
@@ -183,6 +193,8 @@ class OcctSurface final : public Surface {
         return ConePoint(u, v);
       case Kind::kSphere:
         return SpherePoint(u, v);
+      case Kind::kTorus:
+        return TorusPoint(u, v);
       case Kind::kOther:
         break;
     }
@@ -244,6 +256,21 @@ class OcctSurface final : public Surface {
     return InFrame(a1, a2, a3);
   }
 
+  // ElSLib::TorusD0: it rounds a coordinate within 10 ulps of the radii's sum to 0.
+  Vec3 TorusPoint(double u, double v) {
+    const CosSin& cv = Trig(v, v_trig_);
+    const CosSin& cu = Trig(u, u_trig_);
+    double r = radius_ + minor_radius_ * cv.cos;
+    double a3 = minor_radius_ * cv.sin;
+    double a1 = r * cu.cos;
+    double a2 = r * cu.sin;
+    const double eps = 10. * (minor_radius_ + radius_) * RealEpsilon();
+    if (std::abs(a1) <= eps) a1 = 0.;
+    if (std::abs(a2) <= eps) a2 = 0.;
+    if (std::abs(a3) <= eps) a3 = 0.;
+    return InFrame(a1, a2, a3);
+  }
+
   // std::cos(t), std::sin(t), remembered by the bits of t in a direct-mapped table.
   struct CosSin {
     uint64_t key = 0;
@@ -302,10 +329,11 @@ class OcctSurface final : public Surface {
   }
 
   GeomAdaptor_Surface adaptor_;
-  enum class Kind { kOther, kPlane, kCylinder, kCone, kSphere };
+  enum class Kind { kOther, kPlane, kCylinder, kCone, kSphere, kTorus };
   Kind kind_ = Kind::kOther;             // which closed form Point() uses, if any
   std::array<gp_XYZ, 4> frame_;          // x, y and z directions and origin of an elementary one
-  double radius_ = 0;                    // a cone's reference radius
+  double radius_ = 0;                    // a cone's reference radius, a torus's major one
+  double minor_radius_ = 0;              // a torus's
   double cone_sin_ = 0, cone_cos_ = 0;   // of a cone's semi-angle
   std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
   Handle(Geom_BSplineSurface) bspline_;  // null unless B-spline

@@ -210,6 +210,22 @@ TEST(SurfaceTest, SphereMatchesOcctBitForBit) {
   ExpectFacesMatchOcct(BRepPrimAPI_MakeSphere(gp_Pnt(0.3, -2, 1), 7.25).Shape(), GeomAbs_Sphere);
 }
 
+TEST(SurfaceTest, TorusMatchesOcctBitForBit) {
+  gp_Ax2 axis(gp_Pnt(0.3, -2, 1), gp_Dir(0.2, -0.4, 1));
+  ExpectFacesMatchOcct(BRepPrimAPI_MakeTorus(axis, 3.5, 1.25).Shape(), GeomAbs_Torus);
+  // Where ElSLib rounds a coordinate near 0 to 0: the quarter turns.
+  Handle(Geom_ToroidalSurface) torus = new Geom_ToroidalSurface(gp_Ax3(axis), 3.5, 1.25);
+  TopoDS_Face face = BRepBuilderAPI_MakeFace(torus, 1e-7);
+  std::unique_ptr<Surface> ours = MakeFaceSurface(face, false);
+  for (int i = -4; i <= 4; ++i) {
+    for (int j = -4; j <= 4; ++j) {
+      const double u = i * M_PI / 2, v = j * M_PI / 2;
+      gp_Pnt p = torus->Value(u, v);
+      ASSERT_TRUE(SameBits(ours->Point(u, v), {p.X(), p.Y(), p.Z()})) << i << " " << j;
+    }
+  }
+}
+
 TEST(SurfaceTest, PlaneCylinderAndConeMatchOcctBitForBit) {
   gp_Ax2 axis(gp_Pnt(0.3, -2, 1), gp_Dir(0.2, -0.4, 1));
   ExpectFacesMatchOcct(BRepPrimAPI_MakeBox(axis, 3.5, 1.25, 7).Shape(), GeomAbs_Plane);
