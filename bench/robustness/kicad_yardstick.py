@@ -134,11 +134,14 @@ TRIAGE = {
         "b53f6d1's build made 65,352 triangles with 30,062 inverted in 17.2 s CPU (rdmesh mesh "
         "FILE --threads 1 --json, mesh_cpu_seconds; meshbench eval); since b59805c (a fold "
         "across which the normal jumps is left after one split) 1,000 triangles, 166 "
-        "inverted, 7.9 s CPU."),
+        "inverted, 7.9 s CPU; since 8c786e8 (a face stuck on dozens of folds is not started "
+        "again) the same mesh in 0.056 s; since the flips after refinement (face_mesher.cpp "
+        "RepairFolds) 136 inverted."),
     "SSO-8_6.7x9.8mm": (
         "the bow-tie bilinear patches of SSO-4 (face 50: the normal flips at v = 0.79). Since "
         "220b18e: 1,800 triangles, 482 inverted, 2.5 s CPU (b53f6d1's build: 34,548, 15,994, "
-        "8.3 s); since b59805c 1,632 triangles, 408 inverted, 3.1 s CPU."),
+        "8.3 s); since b59805c 1,632 triangles, 408 inverted, 3.1 s CPU; since 8c786e8 0.056 "
+        "s; since RepairFolds 392 inverted."),
     "L_CommonMode_Toroid_Vertical_L19.3mm": (
         "face 220 (cylinder) is bounded by two edges with the same two ends that lie on each "
         "other within edge 439's tolerance 0.0039: the face has no width, and both chords are "
@@ -155,17 +158,26 @@ TRIAGE = {
         "refinement's 'could not be refined to the criteria without folding' (face/refiner). "
         "Since 220b18e: 1,166 triangles, 122 inverted (b53f6d1's build: 1,268, 150); since "
         "b59805c (a fold across which the normal jumps is left after one split) 838 "
-        "triangles, 23 inverted (the _1EP_style2: 834, 23)."),
+        "triangles, 23 inverted (the _1EP_style2: 834, 23). The cause: each face's profile "
+        "circle (radius 0.7) crosses its axis (0.625 from its centre), so the face pinches to a "
+        "point inside itself and turns inside out there; triangles across the pinch fold. Since "
+        "RepairFolds (free edges flipped after refinement while that removes folds) 4 inverted "
+        "by the yardstick, none by the surface normals at the nodes (FaceMesherTest."
+        "FlipsUndoFoldsThatRefinementLeaves, which carries the file)."),
     "Fuseholder_Schurter_0031.7701": (
         "face 132's edges lie up to 0.1 off its surface (tolerance 1e-7): 6 inverted triangles, "
         "hausdorff 0.051 (6x); rdmesh reports the B-rep. Since 220b18e: 4 inverted (b53f6d1's "
         "build: 6)."),
     "L_CommonMode_Toroid_Vertical_L39.4mm": (
         "faces 118 and 334, of 2e-5 mm2 each, hold 3 inverted triangles each (folding, "
-        "face/refiner)."),
+        "face/refiner). Face 118 is a plane sliver about 1e-4 wide: the chord of its 0.10 mm "
+        "B-spline edge crosses the segments of its 0.0004 mm edge in the plane, though not in "
+        "the face's (u,v), where HealEdgeGrids looks for crossings. Checking the plane's "
+        "crossings too split the edge, but then two neighbouring planes failed with their own "
+        "loops crossing in (u,v) (not kept). Flips after refinement change nothing here."),
     "L_CommonMode_Toroid_Vertical_L41.9mm": (
         "as the L39.4: tiny faces the refinement could not refine without folding. Since "
-        "220b18e: 6 inverted (b53f6d1's build: 7)."),
+        "220b18e: 6 inverted (b53f6d1's build: 7); since RepairFolds 4."),
     "TO-8-2": "face 12 (revolution): 1 inverted triangle (folding, face/refiner).",
     "ESP-WROOM-02": (
         "faces 209, 211 and 219 (1e-3 mm2 each): 1 inverted triangle each (folding, "

@@ -533,6 +533,37 @@ class FaceRun {
     return Triangulate() && Refine();
   }
 
+  // A face the refinement left with folded triangles (slivers no split cures, a boundary whose
+  // chords cross) has its free edges flipped while that removes folds: a fold is worse than any
+  // deviation. Each triangle is then measured again, so the face reports what it holds.
+  void RepairFolds() {
+    const int folds = CountFolds(mesh_);
+    if (folds == 0) return;
+    WorkMesh trial = mesh_;
+    if (UnfoldFlips(&trial) == 0 || CountFolds(trial) >= folds) return;
+    mesh_ = std::move(trial);
+    const double limit = job_.criteria.max_deviation;
+    stats_.deviation.assign(mesh_.tri.size(), 0.0);
+    stats_.max_deviation = 0;
+    for (int t = 0; t < static_cast<int>(mesh_.tri.size()); ++t) {
+      if (!mesh_.alive[t]) continue;
+      double d;
+      if (base_) {
+        Vec2 where;
+        d = BothWaysDeviation(mesh_, t, *base_, limit, &where);
+      } else {
+        Vec2 uv[3];
+        Vec3 p[3];
+        mesh_.MeasureCorners(mesh_.tri[t], uv, p);
+        d = MeasureTriangle(*surface_, uv, p, job_.criteria).deviation;
+      }
+      stats_.deviation[t] = d;
+      stats_.max_deviation = std::max(stats_.max_deviation, d);
+    }
+    if (limit > 0)
+      stats_.max_violation = std::max(stats_.max_violation, stats_.max_deviation / limit);
+  }
+
   // The face's triangles, oriented as the face, with exact normals (at poles too) and the
   // working mesh's node references.
   bool Extract(std::vector<NodeRef>* refs) {
@@ -667,6 +698,7 @@ FaceMesh MeshFace(const Model& model, const FacePcurves& pcurves, int face_id,
     if (!run.Refine()) return f;
     if (job.off_surface && !run.OffSurfaceHolds() && !run.BackOnSurface()) return f;
     if (job.off_surface && !run.KeepFewer()) return f;
+    run.RepairFolds();
     if (!run.Extract(refs)) return f;
     run.ExplainShortfall();
   } catch (const Standard_Failure& e) {

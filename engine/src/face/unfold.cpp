@@ -120,6 +120,8 @@ int UnfoldFlips(WorkMesh* mesh) {
   return flips;
 }
 
+int CountFolds(const WorkMesh& mesh) { return MeshScore(mesh).folds; }
+
 int UnfoldInitialMesh(WorkMesh* mesh, Surface& surface, double scale_u, double scale_v) {
   WorkMesh& m = *mesh;
   const int flips = UnfoldFlips(&m);

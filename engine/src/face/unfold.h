@@ -18,6 +18,9 @@ namespace rdmesh {
 /// mesh in that order, so the pass ends; returns the number of flips.
 int UnfoldFlips(WorkMesh* mesh);
 
+/// The triangles of the mesh that fold (TriangleAgreement at most 0).
+int CountFolds(const WorkMesh& mesh);
+
 /// UnfoldFlips, then, while triangles stay folded, bisects a folded triangle's longest free edge
 /// (in (u,v) scaled by scale_u, scale_v) and flips again, keeping a bisection only when the
 /// mesh gets fewer folds or a larger smallest agreement. Returns the number of changes (flips of

@@ -1,9 +1,11 @@
-// The face mesher's reasons for a face meshed over its criteria.
+// The face mesher's reasons for a face meshed over its criteria, and what it leaves folded.
 #include "face/face_mesher.h"
 
 #include <gtest/gtest.h>
 
 #include <string>
+
+#include "rdmesh/engine.h"
 
 namespace rdmesh {
 namespace {
@@ -29,6 +31,42 @@ TEST(FaceMesherTest, BrepReasonSaysWhenTheMissIsMoreThanTheBrepExplains) {
   // A coarse tolerance explains as much as a gap does.
   EXPECT_EQ(BrepReason(0.00067, 0.0003, 0.00886, 0.009).find(kBeyond), std::string::npos);
   EXPECT_NE(BrepReason(0.00067, 0.0003, 0.00886, 0.01).find(kBeyond), std::string::npos);
+}
+
+// Triangles whose normal points against the surface normals at their corners.
+int FoldedTriangles(const FaceMesh& f) {
+  int folded = 0;
+  for (int64_t t = 0; t < f.triangle_count(); ++t) {
+    const int32_t* c = &f.triangles[3 * t];
+    double e[2][3], n[3] = {0, 0, 0};
+    for (int i = 0; i < 3; ++i) {
+      e[0][i] = f.xyz[3 * c[1] + i] - f.xyz[3 * c[0] + i];
+      e[1][i] = f.xyz[3 * c[2] + i] - f.xyz[3 * c[0] + i];
+      for (int k = 0; k < 3; ++k) n[i] += f.normals[3 * c[k] + i];
+    }
+    const double cross[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1],
+                             e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                             e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+    folded += cross[0] * n[0] + cross[1] * n[1] + cross[2] * n[2] < 0;
+  }
+  return folded;
+}
+
+// KiCad's Crystal_HC33-U: faces 3 and 12 are surfaces of revolution whose profile circle
+// crosses their axis, so each pinches to a point inside the face and turns inside out there.
+// Refinement cannot split the triangles across the pinch unfolded; flips after it undo most.
+TEST(FaceMesherTest, FlipsUndoFoldsThatRefinementLeaves) {
+  Context context;
+  Result<std::shared_ptr<const Model>> model =
+      LoadModel(std::string(RDMESH_TEST_DATA) + "/kicad/Crystal_HC33-U_Horizontal.step", &context);
+  ASSERT_TRUE(model.ok()) << model.status().ToString();
+  MeshOptions options;
+  options.max_deviation_rel = 1e-3;
+  Result<MeshResult> result = MeshModel(**model, options);
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  int folded = 0;
+  for (const FaceMesh& f : result->faces) folded += FoldedTriangles(f);
+  EXPECT_EQ(folded, 0);  // 22 without the flips
 }
 
 }  // namespace
