@@ -75,14 +75,17 @@ def test_the_cli_does_not_load_the_document_framework_at_start(cli):
     assert (cli.parent / "rdmesh_occt_xcaf.so").is_file()
 
 
-def test_a_plain_part_meshes_without_the_document_module(cli, data_dir, tmp_path):
-    # Only the readers' module beside it: a .msh of a plain part needs no document; a .glb keeps
-    # the part's names and colours, so it needs the module and says which.
+@pytest.mark.parametrize("name", ["kicad/LED_D3.0mm_Horizontal_O1.27mm_Z2.0mm.step",
+                                  "pyocc_eight_cyl.stp"])
+def test_a_part_or_an_assembly_meshes_without_the_document_module(cli, data_dir, tmp_path, name):
+    # Only the readers' module beside it: a .msh of a part or of an assembly (eight_cyl: a
+    # compound of products) needs no document; a .glb keeps the names and colours, so it needs
+    # the module and says which.
     alone = tmp_path / "alone" / "rdmesh"
     alone.parent.mkdir()
     shutil.copy2(cli, alone)
     shutil.copy2(cli.parent / "rdmesh_occt_readers.so", alone.parent)
-    model = data_dir / "kicad" / "LED_D3.0mm_Horizontal_O1.27mm_Z2.0mm.step"
+    model = data_dir / name
     lean = _mesh(alone, model, tmp_path / "lean.msh")
     assert lean.returncode == 0, lean.stderr
     full = _mesh(cli, model, tmp_path / "full.msh", {"RDMESH_CACHE_DIR": str(tmp_path / "c")})

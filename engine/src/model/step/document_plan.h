@@ -1,7 +1,7 @@
 #pragma once
 // What the STEP translator read of a file's product structure, names, colours and layers, as
 // plain data: the XCAF document is built from it (model/xcaf_document.cpp, OCCT's
-// STEPCAFControl_Reader::Transfer step by step) only where a run keeps the document; a plain
+// STEPCAFControl_Reader::Transfer step by step) only where a run keeps the document; the
 // product structure gives the model's shape and part names without one (LeanShape below).
 // Internal to the engine.
 
@@ -51,10 +51,12 @@ struct DocumentPlan {
   std::vector<PlannedLayer> layers;
 };
 
-/// Where the document is plain, the shape and parts the document would give, without building
-/// it: every root is a distinct unlocated shape holding no assembly, and has a name. Then sets
-/// read->shape (the compound of the roots, as FreeShapesCompound of the document) and
-/// read->parts, and returns true; else false, and the caller builds the document.
+/// The shape and parts the document would give, without building it, where every root is a
+/// distinct unlocated shape and every name's shape is one the document maps (a part, an
+/// assembly or a component; not a sub-shape). Then sets read->shape (FreeShapesCompound of the
+/// document: its free labels' shapes, an assembly's rebuilt from its components as
+/// XCAFDoc_ShapeTool::UpdateAssemblies builds it), read->instances and read->part_names
+/// (DocumentParts), and returns true; else false, and the caller builds the document.
 bool LeanShape(const DocumentPlan& plan, ReadShape* read);
 
 }  // namespace rdmesh::step
