@@ -248,9 +248,16 @@ double CurveSurfaceGap(const Model& model, Curve& curve, double first, double la
     const Handle(Geom_Surface)& surface = BRep_Tool::Surface(model.face(f), location);
     if (surface.IsNull()) return INFINITY;
     const gp_Trsf to_surface = location.Transformation().Inverted();
+    // One projector per face, as GeomAPI_ProjectPointOnSurf(point, surface) sets it up: its
+    // grid of surface points is built once, not for every point (a B-spline's, over its whole
+    // range, was most of axom_boxed_sphere's edge stage).
+    double u0, u1, v0, v1;
+    surface->Bounds(u0, u1, v0, v1);
+    GeomAPI_ProjectPointOnSurf projection;
+    projection.Init(surface, u0, u1, v0, v1, Precision::Confusion());
     for (int k = 0; k <= kGapSamples; ++k) {
       const Vec3 x = curve.Point(first + (last - first) * k / kGapSamples);
-      GeomAPI_ProjectPointOnSurf projection(gp_Pnt(x.x, x.y, x.z).Transformed(to_surface), surface);
+      projection.Perform(gp_Pnt(x.x, x.y, x.z).Transformed(to_surface));
       if (!projection.IsDone() || projection.NbPoints() == 0) return INFINITY;
       gap = std::max(gap, projection.LowerDistance());
     }
