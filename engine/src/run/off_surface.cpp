@@ -106,6 +106,17 @@ Vec3 AwayFromBend(const BRepAdaptor_Curve& curve, double t, double scale) {
   return {-k.X() / norm, -k.Y() / norm, -k.Z() / norm};
 }
 
+// The curve's radius of curvature at t (infinity where it is straight).
+double RadiusOfCurvature(const BRepAdaptor_Curve& curve, double t) {
+  gp_Pnt p;
+  gp_Vec d1, d2;
+  curve.D2(t, p, d1, d2);
+  const double l2 = d1.SquareMagnitude();
+  if (!(l2 > 0)) return HUGE_VAL;
+  const double k = ((d2 - d1 * (d2.Dot(d1) / l2)) / l2).Magnitude();
+  return k > 0 ? 1 / k : HUGE_VAL;
+}
+
 // Where the edge's nodes move, as a unit direction at the curve's point `at` (parameter t).
 Vec3 MoveDirection(const MovedEdge& m, const BRepAdaptor_Curve& curve, double t, Vec3 at,
                    double scale) {
@@ -119,6 +130,13 @@ bool SameAxis(const Circle& a, const Circle& b, double scale) {
 }
 
 }  // namespace
+
+double MovedEdgeScale(const MovedEdge& edge, double deviation, double distance) {
+  const double band = 2 * distance;
+  if (edge.kind != MovedEdge::kCircle && edge.kind != MovedEdge::kCurve) return band;
+  if (!(edge.radius > 0) || !(deviation > 0) || std::isinf(edge.radius)) return band;
+  return band * edge.radius / (edge.radius + distance * deviation);
+}
 
 std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurves,
                                    const std::vector<int8_t>& bend_sides,
@@ -148,6 +166,7 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
         }
       } else if (CircleOf(edge, &m.axis)) {
         m.kind = MovedEdge::kCircle;
+        m.radius = curve.Circle().Radius();
       } else {
         // Another curve that bends one way along its length (no inflection, nowhere straight):
         // its nodes move away from its centre of curvature.
@@ -155,10 +174,13 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
         double f, l;
         BRep_Tool::Range(edge, f, l);
         Vec3 last;
+        m.radius = HUGE_VAL;
         for (int k = 0; k <= kCurveSamples && m.kind == MovedEdge::kCurve; ++k) {
-          const Vec3 away = AwayFromBend(curve, f + (l - f) * k / kCurveSamples, scale);
+          const double t = f + (l - f) * k / kCurveSamples;
+          const Vec3 away = AwayFromBend(curve, t, scale);
           if (Norm(away) == 0 || (k > 0 && Dot(away, last) < kCurveTurn)) m.kind = MovedEdge::kNone;
           last = away;
+          m.radius = std::min(m.radius, RadiusOfCurvature(curve, t));
         }
       }
       if (m.kind == MovedEdge::kNone) continue;

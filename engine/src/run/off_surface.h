@@ -35,7 +35,15 @@ struct MovedEdge {
   Kind kind = kNone;
   Circle axis;  ///< a circle's own; a ruling's faces' (cylinders or cones about it); unused for
                 ///< a curve, whose nodes move away from its centre of curvature
+  /// A circle's radius, a curve's smallest radius of curvature (of its samples): moved away
+  /// from its centre by d, the curve's chords rise (radius + d) / radius times as high.
+  double radius = 0;
 };
+
+/// The chord height an edge grid takes, as a multiple of the deviation, for an edge that moves
+/// `distance` (in deviations) off its curve with faces meshed to twice that: its chords, moved,
+/// must stay within the offset band.
+double MovedEdgeScale(const MovedEdge& edge, double deviation, double distance);
 
 /// Per edge id - 1, of the edges `edge_needed` marks, those that move with their faces:
 /// - a circle whose every face is a plane (the move stays in it) or bends toward the circle's

@@ -116,7 +116,7 @@ Status MakeEdgeGrids(const Model& model, const FacePcurves& pcurves, const MeshO
     for (int e = 1; e <= model.edge_count(); ++e)
       if (plan.edges[e - 1].kind == MovedEdge::kCircle ||
           plan.edges[e - 1].kind == MovedEdge::kCurve)
-        gc.edge_scale[e - 1] = 2 * kOffSurfaceShare;
+        gc.edge_scale[e - 1] = MovedEdgeScale(plan.edges[e - 1], deviation, kOffSurfaceShare);
   }
   return BuildEdgeGrids(model, pcurves, gc, options.threads, sel.edge_needed, context, grids);
 }
