@@ -164,6 +164,7 @@ class OcctSurface final : public Surface {
         frame(torus.Position());
         radius_ = torus.MajorRadius();
         minor_radius_ = torus.MinorRadius();
+        torus_zero_ = 10. * (minor_radius_ + radius_) * RealEpsilon();
         kind_ = Kind::kTorus;
         v_trig_.resize(size_t{1} << kTrigBits);
         break;
@@ -264,10 +265,9 @@ class OcctSurface final : public Surface {
     double a3 = minor_radius_ * cv.sin;
     double a1 = r * cu.cos;
     double a2 = r * cu.sin;
-    const double eps = 10. * (minor_radius_ + radius_) * RealEpsilon();
-    if (std::abs(a1) <= eps) a1 = 0.;
-    if (std::abs(a2) <= eps) a2 = 0.;
-    if (std::abs(a3) <= eps) a3 = 0.;
+    if (std::abs(a1) <= torus_zero_) a1 = 0.;
+    if (std::abs(a2) <= torus_zero_) a2 = 0.;
+    if (std::abs(a3) <= torus_zero_) a3 = 0.;
     return InFrame(a1, a2, a3);
   }
 
@@ -334,6 +334,7 @@ class OcctSurface final : public Surface {
   std::array<gp_XYZ, 4> frame_;          // x, y and z directions and origin of an elementary one
   double radius_ = 0;                    // a cone's reference radius, a torus's major one
   double minor_radius_ = 0;              // a torus's
+  double torus_zero_ = 0;                // coordinates this near 0 are 0 (ElSLib::TorusD0)
   double cone_sin_ = 0, cone_cos_ = 0;   // of a cone's semi-angle
   std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
   Handle(Geom_BSplineSurface) bspline_;  // null unless B-spline

@@ -92,29 +92,27 @@ bool AxisOf(const TopoDS_Face& face, Circle* axis) {
   return true;
 }
 
-// The unit direction away from the centre of curvature of the curve at t (its principal normal,
-// reversed): where a chord's middle falls short of the arc. Zero where it does not bend.
-Vec3 AwayFromBend(const BRepAdaptor_Curve& curve, double t, double scale) {
+// The curve's curvature vector at t (toward its centre of curvature, of length 1 / radius);
+// zero where the derivative vanishes.
+gp_Vec CurvatureVector(const BRepAdaptor_Curve& curve, double t) {
   gp_Pnt p;
   gp_Vec d1, d2;
   curve.D2(t, p, d1, d2);
   const double l2 = d1.SquareMagnitude();
-  if (!(l2 > 0)) return {};
-  const gp_Vec k = (d2 - d1 * (d2.Dot(d1) / l2)) / l2;  // the curvature vector
+  if (!(l2 > 0)) return gp_Vec(0, 0, 0);
+  return (d2 - d1 * (d2.Dot(d1) / l2)) / l2;
+}
+
+// The unit direction away from the centre of curvature (the principal normal, reversed) of a
+// curvature vector k: where a chord's middle falls short of the arc. Zero where it does not bend.
+Vec3 AwayFrom(const gp_Vec& k, double scale) {
   const double norm = k.Magnitude();
   if (!(norm * scale > 1e-6)) return {};
   return {-k.X() / norm, -k.Y() / norm, -k.Z() / norm};
 }
 
-// The curve's radius of curvature at t (infinity where it is straight).
-double RadiusOfCurvature(const BRepAdaptor_Curve& curve, double t) {
-  gp_Pnt p;
-  gp_Vec d1, d2;
-  curve.D2(t, p, d1, d2);
-  const double l2 = d1.SquareMagnitude();
-  if (!(l2 > 0)) return HUGE_VAL;
-  const double k = ((d2 - d1 * (d2.Dot(d1) / l2)) / l2).Magnitude();
-  return k > 0 ? 1 / k : HUGE_VAL;
+Vec3 AwayFromBend(const BRepAdaptor_Curve& curve, double t, double scale) {
+  return AwayFrom(CurvatureVector(curve, t), scale);
 }
 
 // Where the edge's nodes move, as a unit direction at the curve's point `at` (parameter t).
@@ -176,11 +174,12 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
         Vec3 last;
         m.radius = HUGE_VAL;
         for (int k = 0; k <= kCurveSamples && m.kind == MovedEdge::kCurve; ++k) {
-          const double t = f + (l - f) * k / kCurveSamples;
-          const Vec3 away = AwayFromBend(curve, t, scale);
+          const gp_Vec bend = CurvatureVector(curve, f + (l - f) * k / kCurveSamples);
+          const Vec3 away = AwayFrom(bend, scale);
           if (Norm(away) == 0 || (k > 0 && Dot(away, last) < kCurveTurn)) m.kind = MovedEdge::kNone;
           last = away;
-          m.radius = std::min(m.radius, RadiusOfCurvature(curve, t));
+          const double curvature = bend.Magnitude();
+          m.radius = std::min(m.radius, curvature > 0 ? 1 / curvature : HUGE_VAL);
         }
       }
       if (m.kind == MovedEdge::kNone) continue;

@@ -50,7 +50,7 @@ class LeanLabels {
         assembly = plan_.new_shapes.Contains(Unlocated(it.Value()));
     }
     *label = static_cast<int>(labels_.size());
-    labels_.push_back({assembly, shape, {}, nullptr, false});
+    labels_.push_back({assembly, shape, {}, nullptr, false, false});
     if (!assembly) {
       by_shape_.Bind(shape, *label);
       return true;
@@ -110,13 +110,14 @@ class LeanLabels {
     std::vector<Component> components;
     const std::string* name;  // null: the shape tool's automatic one
     bool referred;
+    bool built;  // an assembly's shape rebuilt from its components
   };
 
   // XCAFDoc_ShapeTool::updateComponent: a new compound of the components, a part placed by
   // its component's location (GetShape's Move), a sub-assembly's compound relocated.
   const TopoDS_Shape& ShapeOf(int i) {
     Label& label = labels_[i];
-    if (!label.assembly || built_.count(i) != 0) return label.shape;
+    if (!label.assembly || label.built) return label.shape;
     BRep_Builder builder;
     TopoDS_Compound compound;
     builder.MakeCompound(compound);
@@ -128,7 +129,7 @@ class LeanLabels {
         shape.Move(c.location, Standard_False);
       builder.Add(compound, shape);
     }
-    built_.insert(i);
+    labels_[i].built = true;
     return labels_[i].shape = compound;
   }
 
@@ -152,7 +153,6 @@ class LeanLabels {
   const DocumentPlan& plan_;
   std::vector<Label> labels_;
   NCollection_DataMap<TopoDS_Shape, int, TopTools_ShapeMapHasher> by_shape_;
-  std::set<int> built_;
 };
 
 }  // namespace
