@@ -160,7 +160,9 @@ std::string RunOne(const std::string& path, const Options& options, bool ours_fi
   line += ", \"equivalent\": " + std::string(equivalent ? "true" : "false");
   if (supported) {
     line += ", \"items\": " + std::to_string(ours->items) +
-            ", \"items_healed_by_face\": " + std::to_string(ours->items_healed_by_face);
+            ", \"items_healed_by_face\": " + std::to_string(ours->items_healed_by_face) +
+            ", \"items_in_order\": " + std::to_string(ours->items_in_order) +
+            ", \"faces_fixed_again\": " + std::to_string(ours->faces_fixed_again);
     if (!ours->heal_note.empty()) line += ", \"heal_note\": " + Json(ours->heal_note);
     line += ", \"stages\": {";
     bool first = true;

@@ -568,6 +568,34 @@ TEST(StepTranslateTest, ThreadCountDoesNotChangeTheResult) {
   EXPECT_EQ(comparison.numbering_difference, "");
 }
 
+// A face whose fixing cuts a shared edge's range (ShapeFix_SplitTool::CutEdge, where a wire's
+// edges cross near a vertex) keeps its item healed face by face: the faces after it are fixed
+// again with the edge cut and the tolerances raised as OCCT's run leaves them, and the result is
+// OCCT's, edge tolerances too, on one thread or two.
+TEST(StepTranslateTest, CutSharedEdgeKeepsTheItemHealedFaceByFace) {
+  const fs::path path = fs::path(RDMESH_SHARED_DIR) / "corpus" / "gmsh_samplecrankshaft4a.stp";
+  if (!fs::exists(path)) GTEST_SKIP() << path << " is missing";
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  Result<Translated> two = Translate(bytes, 2);
+  Result<Translated> one = Translate(bytes, 1);
+  ASSERT_TRUE(one.ok() && two.ok());
+  ASSERT_TRUE(one->supported && two->supported);
+  EXPECT_EQ(two->items, 1);
+  EXPECT_EQ(two->items_healed_by_face, 1) << two->heal_note;
+  EXPECT_EQ(two->items_in_order, 1);
+  EXPECT_GE(two->faces_fixed_again, 1);
+  const Comparison comparison = Compare(Summarize(two->read), OcctSummary(bytes));
+  EXPECT_TRUE(comparison.equivalent) << comparison.difference;
+  EXPECT_EQ(comparison.worst_area_rel, 0.0);
+  EXPECT_EQ(comparison.numbering_difference, "");
+  EXPECT_EQ(comparison.tolerance_difference, "");
+  const Comparison threads = Compare(Summarize(one->read), Summarize(two->read));
+  EXPECT_TRUE(threads.equivalent) << threads.difference;
+  EXPECT_EQ(threads.worst_area_rel, 0.0);
+  EXPECT_EQ(threads.tolerance_difference, "");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Broken and unsupported files.
 

@@ -1042,10 +1042,36 @@ struct StoredPcurve {
 // The pcurves StorePlanePcurves stored, by address.
 using StoredPcurves = std::map<const Geom2d_Curve*, StoredPcurve>;
 
+// A parameter range of an edge.
+struct EdgeRange {
+  double first = 0, last = 0;
+  bool operator==(const EdgeRange& other) const {
+    return first == other.first && last == other.last;
+  }
+};
+// Shared raw edges (by TShape) -> the range a face's fixing cut them to.
+using EdgeRanges = std::map<const TopoDS_TShape*, EdgeRange>;
+
+// What the fixing of a face finds of its shared edges and vertices, as the faces fixed before
+// it in OCCT's order left them: cut ranges, raised tolerances.
+struct FoundState {
+  EdgeRanges ranges;
+  std::map<const TopoDS_TShape*, double> tolerances;  // raw edge or vertex -> raised tolerance
+  bool operator==(const FoundState& other) const {
+    return ranges == other.ranges && tolerances == other.tolerances;
+  }
+  bool operator!=(const FoundState& other) const { return !(*this == other); }
+};
+
 // One face of one item, fixed on its own.
 struct FaceJob {
   BrepItem* item = nullptr;
   size_t item_index = 0;
+  size_t order = 0;  // its place among the item's faces, the order OCCT's shell tool fixes them in
+  // The shared edges whose range earlier faces' fixing cut, as this face's fixing found them
+  // (OCCT's ShapeFix_SplitTool::CutEdge sets every representation's range of an edge in place).
+  FoundState found;
+  EdgeRanges cut;     // the shared edges whose range this face's fixing cut, and to what
   TopoDS_Face raw;    // the face as it occurs in its shell
   TopoDS_Face local;  // the private copy ShapeFix_Face works on
   Handle(ShapeBuild_ReShape) context;
@@ -1061,9 +1087,13 @@ struct FaceJob {
 bool IsIdentity(const TopoDS_Shape& shape) { return shape.Location().IsIdentity(); }
 
 // A private copy of a vertex: same point, tolerance and point representations.
-TopoDS_Shape CopyVertex(const TopoDS_Shape& vertex, TopTools_DataMapOfShapeShape* copies) {
+TopoDS_Shape CopyVertex(const TopoDS_Shape& vertex, const FoundState& state,
+                        TopTools_DataMapOfShapeShape* copies) {
   if (const TopoDS_Shape* found = copies->Seek(vertex)) return *found;
   TopoDS_Shape copy = vertex.EmptyCopied();
+  if (const auto raised = state.tolerances.find(vertex.TShape().get());
+      raised != state.tolerances.end())
+    Handle(BRep_TVertex)::DownCast(copy.TShape())->UpdateTolerance(raised->second);
   copy.Orientation(TopAbs_FORWARD);
   copies->Bind(vertex, copy);
   return copy;
@@ -1072,7 +1102,8 @@ TopoDS_Shape CopyVertex(const TopoDS_Shape& vertex, TopTools_DataMapOfShapeShape
 // A private copy of an edge for the face on `surface` at `location`: its 3D curve and its
 // representations on that surface only, its tolerance and flags, copies of its vertices.
 TopoDS_Shape CopyEdge(const TopoDS_Shape& edge, const Handle(Geom_Surface) & surface,
-                      const TopLoc_Location& location, TopTools_DataMapOfShapeShape* copies) {
+                      const TopLoc_Location& location, const FoundState& state,
+                      TopTools_DataMapOfShapeShape* copies) {
   if (const TopoDS_Shape* found = copies->Seek(edge)) return *found;
   Handle(BRep_TEdge) raw = Handle(BRep_TEdge)::DownCast(edge.TShape());
   BRep_Builder builder;
@@ -1093,12 +1124,20 @@ TopoDS_Shape CopyEdge(const TopoDS_Shape& edge, const Handle(Geom_Surface) & sur
       te->ChangeCurves().Append(copy);
     }
   }
+  // As BRep_Builder::Range(edge, first, last) left it for the faces fixed after the cut.
+  if (const auto found = state.ranges.find(raw.get()); found != state.ranges.end()) {
+    for (BRep_ListIteratorOfListOfCurveRepresentation it(te->Curves()); it.More(); it.Next())
+      if (Handle(BRep_GCurve) curve = Handle(BRep_GCurve)::DownCast(it.Value()); !curve.IsNull())
+        curve->SetRange(found->second.first, found->second.last);
+  }
   te->Tolerance(raw->Tolerance());
+  if (const auto raised = state.tolerances.find(raw.get()); raised != state.tolerances.end())
+    te->UpdateTolerance(raised->second);
   te->SameParameter(raw->SameParameter());
   te->SameRange(raw->SameRange());
   te->Degenerated(raw->Degenerated());
   for (TopoDS_Iterator it(edge, Standard_False, Standard_False); it.More(); it.Next()) {
-    TopoDS_Shape vertex = CopyVertex(it.Value().Oriented(TopAbs_FORWARD), copies);
+    TopoDS_Shape vertex = CopyVertex(it.Value().Oriented(TopAbs_FORWARD), state, copies);
     builder.Add(copy, vertex.Oriented(it.Value().Orientation()));
   }
   copies->Bind(edge, copy);
@@ -1124,7 +1163,8 @@ bool CopyFace(FaceJob* job) {
       if (edge.ShapeType() != TopAbs_EDGE || !IsIdentity(edge)) return false;
       for (TopoDS_Iterator v(edge); v.More(); v.Next())
         if (!IsIdentity(v.Value())) return false;
-      TopoDS_Shape local = CopyEdge(edge.Oriented(TopAbs_FORWARD), surface, location, &job->copies);
+      TopoDS_Shape local =
+          CopyEdge(edge.Oriented(TopAbs_FORWARD), surface, location, job->found, &job->copies);
       builder.Add(copy, local.Oriented(edge.Orientation()));
     }
     copy.Closed(wire.Closed());
@@ -1215,6 +1255,20 @@ std::vector<Handle(Geom2d_Curve)> KeptPcurves(const Jobs& jobs) {
   return kept;
 }
 
+// Clears what fixing `job` made, for it to be fixed again.
+void ResetOutputs(FaceJob* job) {
+  job->local.Nullify();
+  job->context.Nullify();
+  job->copies.Clear();
+  job->healed.Nullify();
+  job->failure = nullptr;
+  job->raw_of.Clear();
+  job->healed_of_shared.Clear();
+  job->vertex_tolerances.Clear();
+  job->stored.clear();
+  job->cut.clear();
+}
+
 void FixFace(FaceJob* job) {
   const UnitFactors& units = job->item->units;
   const TopoDS_Face local = TopoDS::Face(job->local);
@@ -1266,6 +1320,25 @@ std::vector<std::pair<const void*, int>> SharedUses(const TopoDS_Shape& face,
   return uses;
 }
 
+// Whether the fixing of a same-parameter, same-range edge `raw` changed its copy `healed` only as
+// ShapeFix_SplitTool::CutEdge does where a wire's edges cross near a vertex: every range (of the
+// 3D curve and of the pcurves) set to one new range, as BRep_Builder::Range sets them.
+bool IsRangeCut(const TopoDS_Edge& raw, const TopoDS_Edge& healed) {
+  if (!BRep_Tool::SameParameter(raw) || !BRep_Tool::SameRange(raw) ||
+      !BRep_Tool::SameParameter(healed) || !BRep_Tool::SameRange(healed))
+    return false;
+  double first, last;
+  BRep_Tool::Range(healed, first, last);
+  for (BRep_ListIteratorOfListOfCurveRepresentation it(
+           Handle(BRep_TEdge)::DownCast(healed.TShape())->Curves());
+       it.More(); it.Next()) {
+    Handle(BRep_GCurve) curve = Handle(BRep_GCurve)::DownCast(it.Value());
+    if (curve.IsNull()) return false;  // a polygon: nothing the reader's fixing makes
+    if (curve->First() != first || curve->Last() != last) return false;
+  }
+  return true;
+}
+
 // Whether the fixing kept the face's ties to the other faces, so its copy can be merged back:
 // every edge it shares with another face used as before, on its own 3D curve and range, its
 // vertices where they were. Anything private to the face (a seam, an edge added at a pole, a
@@ -1296,7 +1369,16 @@ const char* CheckMergeable(FaceJob* job, const TopTools_MapOfShape& shared) {
     double fr, lr2, fh, lh2;
     Handle(Geom_Curve) cr = BRep_Tool::Curve(raw, lr, fr, lr2);
     Handle(Geom_Curve) ch = BRep_Tool::Curve(healed, lh, fh, lh2);
-    if (cr != ch || !lr.IsEqual(lh) || fr != fh || lr2 != lh2) return "shared edge's curve";
+    if (cr != ch || !lr.IsEqual(lh)) return "shared edge's curve";
+    if (const auto found = job->found.ranges.find(raw.TShape().get());
+        found != job->found.ranges.end()) {
+      fr = found->second.first;
+      lr2 = found->second.last;
+    }
+    if (fr != fh || lr2 != lh2) {
+      if (!IsRangeCut(raw, healed)) return "shared edge's curve";
+      job->cut[raw.TShape().get()] = EdgeRange{fh, lh2};
+    }
     if (BRep_Tool::Degenerated(raw) != BRep_Tool::Degenerated(healed))
       return "shared edge degenerated";
     for (TopoDS_Iterator v(raw, Standard_False, Standard_False); v.More(); v.Next()) {
@@ -1355,6 +1437,7 @@ class Merger {
   Merger(const std::vector<FaceJob*>& jobs, const TopTools_MapOfShape& shared)
       : jobs_(jobs), shared_(shared) {
     for (FaceJob* job : jobs_) {
+      for (const auto& [edge, range] : job->cut) last_cut_[edge] = {range, job->order};
       job_of_.Bind(job->raw, job);
       for (TopTools_DataMapOfShapeShape::Iterator it(job->healed_of_shared); it.More(); it.Next()) {
         if (auto* copies = copies_of_shared_.ChangeSeek(it.Key()))
@@ -1427,8 +1510,18 @@ class Merger {
     TopoDS_Edge merged;
     builder.MakeEdge(merged);
     Handle(BRep_TEdge) te = Handle(BRep_TEdge)::DownCast(merged.TShape());
-    for (BRep_ListIteratorOfListOfCurveRepresentation it(source->Curves()); it.More(); it.Next())
-      if (it.Value()->IsCurve3D()) te->ChangeCurves().Append(it.Value()->Copy());
+    // The last cut of the edge's range, in the faces' order: it set every representation's range
+    // then, those of the faces fixed before it too.
+    const auto cut = last_cut_.find(source.get());
+    auto cut_range = [&](const Handle(BRep_CurveRepresentation) & rep) {
+      Handle(BRep_GCurve) curve = Handle(BRep_GCurve)::DownCast(rep);
+      if (!curve.IsNull()) curve->SetRange(cut->second.first.first, cut->second.first.last);
+    };
+    for (BRep_ListIteratorOfListOfCurveRepresentation it(source->Curves()); it.More(); it.Next()) {
+      if (!it.Value()->IsCurve3D()) continue;
+      te->ChangeCurves().Append(it.Value()->Copy());
+      if (cut != last_cut_.end()) cut_range(te->ChangeCurves().Last());
+    }
     double tolerance = 0.;
     bool same_parameter = true, same_range = true;
     static const std::vector<std::pair<FaceJob*, TopoDS_Shape>> kNone;
@@ -1437,8 +1530,12 @@ class Merger {
     for (const auto& [job, copy] : copies) {
       const TopoDS_Shape* healed = &copy;
       Handle(BRep_TEdge) he = Handle(BRep_TEdge)::DownCast(healed->TShape());
-      for (BRep_ListIteratorOfListOfCurveRepresentation it(he->Curves()); it.More(); it.Next())
-        if (!it.Value()->IsCurve3D()) te->ChangeCurves().Append(it.Value()->Copy());
+      for (BRep_ListIteratorOfListOfCurveRepresentation it(he->Curves()); it.More(); it.Next()) {
+        if (it.Value()->IsCurve3D()) continue;
+        te->ChangeCurves().Append(it.Value()->Copy());
+        if (cut != last_cut_.end() && job->order < cut->second.second)
+          cut_range(te->ChangeCurves().Last());
+      }
       tolerance = std::max(tolerance, he->Tolerance());
       same_parameter = same_parameter && he->SameParameter();
       same_range = same_range && he->SameRange();
@@ -1517,6 +1614,8 @@ class Merger {
   }
 
   const std::vector<FaceJob*>& jobs_;
+  // Shared raw edge -> the last range a face's fixing cut it to, and that face's order.
+  std::map<const TopoDS_TShape*, std::pair<EdgeRange, size_t>> last_cut_;
   const TopTools_MapOfShape& shared_;
   NCollection_DataMap<TopoDS_Shape, FaceJob*, TopTools_ShapeMapHasher> job_of_;
   // Each shared raw edge's fixed copies, with their faces' jobs, in the jobs' order: looked up
@@ -1635,6 +1734,7 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
       job->item = items[i];
       job->item_index = i;
       job->raw = face;
+      job->order = item_jobs[i].size();
       item_jobs[i].push_back(job.get());
       jobs.push_back(std::move(job));
     }
@@ -1646,32 +1746,94 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
   static const char* const kSkipped = "skipped";
   const std::unique_ptr<std::atomic<bool>[]> refused(new std::atomic<bool>[items.size()]);
   for (size_t i = 0; i < items.size(); ++i) refused[i] = false;
-  runner.For(
-      0, static_cast<int>(jobs.size()),
-      [&](int j) {
-        if (stopped.load() || (stop && stop())) {
-          stopped = true;
-          return;
-        }
-        FaceJob* job = jobs[j].get();
-        if (refused[job->item_index].load()) {
-          job->failure = kSkipped;
-          return;
-        }
-        try {
-          OCC_CATCH_SIGNALS
-          if (!CopyFace(job)) {
-            job->failure = "located sub-shapes";
-          } else {
-            FixFace(job);
-            job->failure = CheckMergeable(job, shared[job->item_index]);
+  auto fix_jobs = [&](const std::vector<FaceJob*>& some) {
+    runner.For(
+        0, static_cast<int>(some.size()),
+        [&](int j) {
+          if (stopped.load() || (stop && stop())) {
+            stopped = true;
+            return;
           }
-        } catch (...) {
-          job->failure = "an exception";
+          FaceJob* job = some[j];
+          if (refused[job->item_index].load()) {
+            job->failure = kSkipped;
+            return;
+          }
+          ResetOutputs(job);
+          try {
+            OCC_CATCH_SIGNALS
+            if (!CopyFace(job)) {
+              job->failure = "located sub-shapes";
+            } else {
+              FixFace(job);
+              job->failure = CheckMergeable(job, shared[job->item_index]);
+            }
+          } catch (...) {
+            job->failure = "an exception";
+          }
+          if (job->failure != nullptr) refused[job->item_index] = true;
+        },
+        Partition::kOnePerTask);
+  };
+  std::vector<FaceJob*> all(jobs.size());
+  for (size_t j = 0; j < jobs.size(); ++j) all[j] = jobs[j].get();
+  fix_jobs(all);
+  // In an item where a face's fixing cut a shared edge's range, each face must find its edges
+  // and vertices as OCCT's run leaves them for it: cut, with the tolerances the faces before it
+  // raised. It is fixed again with them. Each round settles at least the first face whose input
+  // changed; an item still unsettled after a few rounds is healed whole. (Elsewhere the faces
+  // see the item as built, which the merge makes equal to OCCT's result.)
+  static constexpr int kRounds = 6;
+  std::vector<char> in_order(items.size(), 0);
+  for (int round = 0; round <= kRounds && !stopped; ++round) {
+    std::vector<FaceJob*> again;
+    for (size_t i = 0; i < items.size(); ++i) {
+      if (refused[i].load()) continue;
+      for (const FaceJob* job : item_jobs[i])
+        if (!job->cut.empty()) in_order[i] = 1;
+      if (!in_order[i]) continue;
+      const size_t before_again = again.size();
+      FoundState state;  // as the faces fixed so far left the item's shared edges and vertices
+      for (FaceJob* job : item_jobs[i]) {
+        FoundState found;
+        for (TopExp_Explorer ex(job->raw, TopAbs_EDGE); ex.More(); ex.Next()) {
+          const TopoDS_TShape* edge = ex.Current().TShape().get();
+          if (auto range = state.ranges.find(edge); range != state.ranges.end())
+            found.ranges.insert(*range);
+          if (auto raised = state.tolerances.find(edge); raised != state.tolerances.end())
+            found.tolerances.insert(*raised);
         }
-        if (job->failure != nullptr) refused[job->item_index] = true;
-      },
-      Partition::kOnePerTask);
+        for (TopExp_Explorer ex(job->raw, TopAbs_VERTEX); ex.More(); ex.Next()) {
+          const TopoDS_TShape* vertex = ex.Current().TShape().get();
+          if (auto raised = state.tolerances.find(vertex); raised != state.tolerances.end())
+            found.tolerances.insert(*raised);
+        }
+        if (found != job->found) {
+          job->found = std::move(found);
+          again.push_back(job);
+        }
+        for (const auto& [edge, range] : job->cut) state.ranges[edge] = range;
+        auto raise = [&](const TopoDS_Shape& raw, double tolerance, double raw_tolerance) {
+          if (tolerance <= raw_tolerance) return;
+          double& known = state.tolerances[raw.TShape().get()];
+          known = std::max(known, tolerance);
+        };
+        for (TopTools_DataMapOfShapeShape::Iterator it(job->healed_of_shared); it.More(); it.Next())
+          raise(it.Key(), BRep_Tool::Tolerance(TopoDS::Edge(it.Value())),
+                BRep_Tool::Tolerance(TopoDS::Edge(it.Key())));
+        for (TopTools_DataMapOfShapeReal::Iterator it(job->vertex_tolerances); it.More(); it.Next())
+          raise(it.Key(), it.Value(), BRep_Tool::Tolerance(TopoDS::Vertex(it.Key())));
+      }
+      if (round == kRounds && again.size() > before_again) {
+        refused[i] = true;
+        if (stats.refused.empty()) stats.refused = "cut edges unsettled";
+      }
+    }
+    if (again.empty() || round == kRounds) break;
+    fix_jobs(again);
+    stats.faces_fixed_again += static_cast<int>(again.size());
+  }
+  for (char order : in_order) stats.items_in_order += order;
   stats.face_seconds = seconds();
   if (stopped) return stats;
   std::atomic<int> parallel{0};
@@ -1680,7 +1842,7 @@ HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
       0, static_cast<int>(items.size()),
       [&](int i) {
         BrepItem* item = items[i];
-        bool mergeable = !item_jobs[i].empty();
+        bool mergeable = !item_jobs[i].empty() && !refused[i].load();
         for (FaceJob* job : item_jobs[i]) {
           if (job->failure == nullptr) continue;
           mergeable = false;

@@ -84,7 +84,11 @@ struct HealStats {
   int items_face_parallel = 0;  ///< items healed face by face (the others by HealItem)
   std::string refused;          ///< why the first other item was not, e.g. "shared edge's curve"
   double face_seconds = 0;      ///< the parallel face fixing
-  double finish_seconds = 0;    ///< merging, the shell and solid stages, and HealItem fallbacks
+  /// Items where a face's fixing cut a shared edge's range, whose faces then found their edges
+  /// and vertices as the faces before them left them, and how many faces that fixed again.
+  int items_in_order = 0;
+  int faces_fixed_again = 0;
+  double finish_seconds = 0;  ///< merging, the shell and solid stages, and HealItem fallbacks
   /// Pcurves on planes the fixing stored and left on the healed items (OCCT projects them on
   /// demand and stores none): RemovePcurves takes them off once the last stage that reads them
   /// has run.

@@ -1261,6 +1261,8 @@ Translated Translator::Run() {
   out.stage_seconds.emplace_back("document", Since(stage));
   out.items = static_cast<int>(items_.size());
   out.items_healed_by_face = heal_stats_.items_face_parallel;
+  out.items_in_order = heal_stats_.items_in_order;
+  out.faces_fixed_again = heal_stats_.faces_fixed_again;
   out.heal_note = heal_stats_.refused;
   out.supported = true;
   return out;

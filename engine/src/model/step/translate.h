@@ -44,6 +44,10 @@ struct Translated {
   /// parallel; the others are healed whole, as OCCT heals them (`heal_note` says why, for one).
   int items = 0;
   int items_healed_by_face = 0;
+  /// Items healed face by face where a face's fixing cut a shared edge's range (the faces
+  /// after it fixed again, `faces_fixed_again` in all, with the edges as OCCT's run leaves them).
+  int items_in_order = 0;
+  int faces_fixed_again = 0;
   std::string heal_note;
 };
 
