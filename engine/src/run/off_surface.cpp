@@ -121,6 +121,14 @@ Vec3 MoveDirection(const MovedEdge& m, const BRepAdaptor_Curve& curve, double t,
   return m.kind == MovedEdge::kCurve ? AwayFromBend(curve, t, scale) : Radial(m.axis, at);
 }
 
+// Whether edge `e` is a straight line whose faces are all planes.
+bool LineBetweenPlanes(const Model& model, int e) {
+  if (BRepAdaptor_Curve(model.edge(e)).GetType() != GeomAbs_Line) return false;
+  for (int id : model.edge_faces[e - 1])
+    if (FaceSurfaceType(model.face(id)) != SurfaceType::kPlane) return false;
+  return true;
+}
+
 bool SameAxis(const Circle& a, const Circle& b, double scale) {
   if (Norm(Cross(a.axis, b.axis)) > 1e-9) return false;
   const Vec3 d = b.center - a.center;
@@ -151,10 +159,13 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
       BRepAdaptor_Curve curve(edge);
       const bool line = curve.GetType() == GeomAbs_Line;
       if (line) {
-        // A ruling of cylinders or cones about one axis: it moves with them, away from it.
+        // A ruling of cylinders or cones about one axis: it moves with them, away from it. A
+        // plane beside them (a fillet's tangent plane) takes the move too: its triangles along
+        // the line then leave it by no more than the line does.
         m.kind = MovedEdge::kRuling;
         bool first = true;
         for (int id : model.edge_faces[e - 1]) {
+          if (FaceSurfaceType(model.face(id)) == SurfaceType::kPlane) continue;
           Circle axis;
           if (!AxisOf(model.face(id), &axis) || (!first && !SameAxis(m.axis, axis, scale))) {
             m.kind = MovedEdge::kNone;
@@ -162,6 +173,7 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
           }
           if (first) m.axis = axis, first = false;
         }
+        if (first) m.kind = MovedEdge::kNone;  // planes only: nothing to move with
       } else if (CircleOf(edge, &m.axis)) {
         m.kind = MovedEdge::kCircle;
         m.radius = curve.Circle().Radius();
@@ -186,8 +198,9 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
       bool ok = true;
       for (int id : model.edge_faces[e - 1]) {
         const TopoDS_Face& face = model.face(id);
-        if (FaceSurfaceType(face) == SurfaceType::kPlane && m.kind != MovedEdge::kRuling)
-          continue;  // a plane's curve bends within it: the move stays in it
+        // A plane's curve bends within it, and the move stays in it; a ruling leaves a plane
+        // by the offset at most, which its deviation allows.
+        if (FaceSurfaceType(face) == SurfaceType::kPlane) continue;
         if (bend_sides[id - 1] == 0) {
           ok = false;
           break;
@@ -215,8 +228,9 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
       candidate[e - 1] = MovedEdge();
     }
   }
-  // A vertex moves when every edge at it is a candidate that moves it the same way, or an edge
-  // of one face.
+  // A vertex moves when every edge at it is a candidate that moves it the same way, an edge of
+  // one face, or a line between planes (whose segment from the moved vertex then leaves them by
+  // the offset at most).
   const int nv = model.vertices.Extent();
   std::vector<Vec3> way(nv + 1);  // the first candidate's direction at the vertex
   std::vector<uint8_t> blocked(nv + 1, 0);
@@ -230,7 +244,7 @@ std::vector<MovedEdge> OffsetEdges(const Model& model, const FacePcurves& pcurve
       const int id = v.IsNull() ? 0 : model.vertices.FindIndex(v);
       if (id == 0) continue;
       if (candidate[e - 1].kind == MovedEdge::kNone) {
-        if (model.edge_faces[e - 1].size() > 1) blocked[id] = 1;
+        if (model.edge_faces[e - 1].size() > 1 && !LineBetweenPlanes(model, e)) blocked[id] = 1;
         continue;
       }
       const gp_Pnt p = BRep_Tool::Pnt(v);

@@ -4,13 +4,18 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepAdaptor_Curve.hxx>
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepFilletAPI_MakeFillet.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakePrism.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
 #include <algorithm>
 #include <cmath>
 #include <gp_Elips.hxx>
@@ -283,6 +288,52 @@ TEST(OffSurfaceTest, EllipsesMoveAwayFromTheirBend) {
       EXPECT_LT(level, 1.0 + 1.01 * delta);  // |grad| >= 1/3 ... 1: at most delta / 1 outward
     }
   }
+}
+
+// A fillet between two planes: its tangent lines move with it, away from its axis (the planes'
+// triangles along them leave the planes by the offset at most), and so do the corners where
+// they meet the box's plane-plane edges. With its boundary held on the surface the fillet
+// gained nothing off it.
+TEST(OffSurfaceTest, FilletsMoveWithTheirTangentLines) {
+  const TopoDS_Shape box = BRepPrimAPI_MakeBox(4.0, 4.0, 4.0).Shape();
+  BRepFilletAPI_MakeFillet fillet(box);
+  for (TopExp_Explorer ex(box, TopAbs_EDGE); ex.More(); ex.Next()) {
+    BRepAdaptor_Curve curve(TopoDS::Edge(ex.Current()));
+    const gp_Pnt a = curve.Value(curve.FirstParameter()), b = curve.Value(curve.LastParameter());
+    // The vertical edge at x = y = 4.
+    if (a.X() > 3.99 && a.Y() > 3.99 && b.X() > 3.99 && b.Y() > 3.99)
+      fillet.Add(1.0, TopoDS::Edge(ex.Current()));
+  }
+  auto model = LoadShape(fillet.Shape(), "filleted box");
+  ASSERT_TRUE(model);
+  auto [a, b] = OnAndOff(*model, 1e-4);
+  EXPECT_EQ(OpenEdges(b.mesh), 0);
+  const double delta = 1e-4 * GetModelInfo(*model).diagonal;
+  int fillets = 0;
+  std::vector<int> round;
+  for (size_t i = 0; i < b.faces.size(); ++i) {
+    const FaceMesh& f = b.faces[i];
+    EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+    if (f.surface_type != SurfaceType::kCylinder) continue;
+    ++fillets;
+    round.push_back(f.face_id);
+    EXPECT_NE(f.offset, 0) << f.offset_reason;
+    EXPECT_LE(f.triangle_count(), 0.8 * a.faces[i].triangle_count());
+  }
+  EXPECT_EQ(fillets, 1);
+  // Every point of the fillet's triangles within the deviation of its radius about x = y = 3.
+  auto [lo, hi] = SampledRange(
+      b.mesh, round, [](const double* x) { return std::hypot(x[0] - 3.0, x[1] - 3.0) - 1.0; });
+  EXPECT_GE(lo, -delta);
+  EXPECT_LE(hi, delta);
+  // And the planes' points within it of the box's faces (inside the box's closure).
+  auto [plo, phi] = SampledRange(b.mesh, {}, [](const double* x) {
+    double outside = 0;
+    for (int c = 0; c < 3; ++c) outside = std::max({outside, -x[c], x[c] - 4.0});
+    return outside;
+  });
+  EXPECT_LE(phi, delta);
+  EXPECT_LE(b.summary.triangles, a.summary.triangles);
 }
 
 TEST(OffSurfaceTest, NeedsADeviationOrABudget) {
