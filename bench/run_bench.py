@@ -635,7 +635,11 @@ def main():
     ap.add_argument("--no-analytic", action="store_true", help="skip the sphere and cylinder")
     ap.add_argument("--no-build", action="store_true", help="use the binaries as they are")
     ap.add_argument("--fresh", action="store_true", help="rerun rdmesh even when the cache has this binary's results")
-    ap.add_argument("--no-cache", action="store_true")
+    ap.add_argument("--no-cache", action="store_true",
+                    help="measure everything again, reading no earlier record; this run's records go "
+                         "to BUILD/bench_run.jsonl (started afresh), which --resume reads")
+    ap.add_argument("--resume", action="store_true",
+                    help="go on with the last --no-cache run where it stopped (its BUILD/bench_run.jsonl)")
     a = ap.parse_args()
     if a.results_only:
         with open(a.results_only) as f:
@@ -706,7 +710,12 @@ def main():
         steps += [os.path.join(YARD, "models", m) for m in ANALYTIC]
 
     os.makedirs(a.build_dir, exist_ok=True)
-    cache = Cache(None if a.no_cache else os.path.join(a.build_dir, "bench_cache.jsonl"))
+    # A --no-cache run keeps its own records, so that a run longer than a sitting can be resumed;
+    # the shared cache is neither read nor written by it.
+    run_records = os.path.join(a.build_dir, "bench_run.jsonl")
+    if a.no_cache and not a.resume and os.path.exists(run_records):
+        os.remove(run_records)
+    cache = Cache(run_records if a.no_cache or a.resume else os.path.join(a.build_dir, "bench_cache.jsonl"))
     tmp = tempfile.mkdtemp(prefix="rdmesh-bench-")
     models, infos, summaries, records = [], {}, {}, []
     try:
