@@ -549,7 +549,8 @@ def render(results):
                  "timed `Client.upload(FILE)` (the worker parses it) and the first "
                  "`Client.mesh(model, max_deviation_rel=1e-3)` (the mesh arrives in the Python "
                  "client's memory; no file is written), against the plain runner's whole process; "
-                 "medians of %d alternating rounds." % meta["rounds"])
+                 "medians of %d alternating rounds." % meta.get("service_rounds", meta["rounds"])
+                 + (" Here %s." % meta["service_note"] if meta.get("service_note") else ""))
         L += ["", "| file | faces | upload s | first Mesh s | upload + Mesh s | plain s | ratio |",
               "|---|---:|---:|---:|---:|---:|---:|"]
         for s in service:
@@ -641,12 +642,39 @@ def parser():
     p.add_argument("--timeout", type=float, default=900.0, help="seconds per process")
     p.add_argument("--service", action="store_true", help="also time rdmeshd's first Mesh")
     p.add_argument("--service-files", type=int, default=10)
+    p.add_argument("--service-into", metavar="FILE",
+                   help="time rdmeshd's first Mesh alone, on the files of an earlier --json FILE, "
+                        "add it to that file and re-render --out")
     p.add_argument("--py-gen-dir", default=os.environ.get("RDMESH_PY_GEN_DIR"),
                    help="the Python client's generated stubs (default: the client's _gen)")
     p.add_argument("--out", default=str(REPO / "bench" / "PARSE.md"))
     p.add_argument("--json", dest="json_out", help="every measurement as JSON")
     p.add_argument("--results-only", metavar="FILE", help="re-render --out from a --json file")
     return p
+
+
+def service_into(args):
+    """The service's timing alone (the first Mesh after UploadModel, with `args.rdmeshd`), added
+    to an earlier run's results, whose files it picks; the markdown rendered again."""
+    path = pathlib.Path(args.service_into)
+    results = json.loads(path.read_text())
+    shm = pathlib.Path("/dev/shm")
+    work_dir = pathlib.Path(tempfile.mkdtemp(prefix="parse-e2e-",
+                                             dir=str(shm) if shm.is_dir() else None))
+    try:
+        results["service"] = measure_service(args, child_env(args.rdmesh_env), work_dir,
+                                             results["rows"], args.rounds)
+    finally:
+        shutil.rmtree(work_dir, ignore_errors=True)
+    results["meta"]["service_rounds"] = args.rounds
+    results["meta"]["service_note"] = (
+        "the service measured afterwards (%s, %s at commit %s, load average before %s)" % (
+            datetime.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z"), args.rdmeshd,
+            git("rev-parse", "--short=10", "HEAD"), load_average()))
+    path.write_text(json.dumps(results, indent=1))
+    pathlib.Path(args.out).write_text(render(results))
+    print("wrote %s and %s" % (path, args.out))
+    return 0
 
 
 def main(argv=None):
@@ -662,6 +690,8 @@ def main(argv=None):
     args.plain_runner = os.path.abspath(args.plain_runner)
     args.rdmeshd = os.path.abspath(args.rdmeshd or os.path.join(os.path.dirname(args.rdmesh),
                                                                 "rdmeshd"))
+    if args.service_into:
+        return service_into(args)
     for binary in [args.rdmesh, args.plain_runner] + ([args.rdmeshd] if args.service else []):
         if not os.access(binary, os.X_OK):
             raise SystemExit("no executable at %s" % binary)
