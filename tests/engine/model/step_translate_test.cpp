@@ -86,6 +86,12 @@ File ParseOk(const std::string& bytes) {
   return file.ok() ? std::move(*file) : File();
 }
 
+// The bytes of the file at `path`.
+std::string ReadBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 Result<Translated> Translate(const std::string& bytes, int threads = 0) {
   Result<File> file = Parse(bytes);
   if (!file.ok()) return file.status();
@@ -556,8 +562,7 @@ TEST(StepTranslateTest, InchesScaleToMillimetres) {
 
 TEST(StepTranslateTest, ThreadCountDoesNotChangeTheResult) {
   const fs::path path = fs::path(RDMESH_TEST_DATA) / "pyocc_eight_cyl.stp";
-  std::ifstream in(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = ReadBytes(path);
   Result<Translated> one = Translate(bytes, 1);
   Result<Translated> two = Translate(bytes, 2);
   ASSERT_TRUE(one.ok() && two.ok());
@@ -575,8 +580,7 @@ TEST(StepTranslateTest, ThreadCountDoesNotChangeTheResult) {
 TEST(StepTranslateTest, CutSharedEdgeKeepsTheItemHealedFaceByFace) {
   const fs::path path = fs::path(RDMESH_SHARED_DIR) / "corpus" / "gmsh_samplecrankshaft4a.stp";
   if (!fs::exists(path)) GTEST_SKIP() << path << " is missing";
-  std::ifstream in(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = ReadBytes(path);
   Result<Translated> two = Translate(bytes, 2);
   Result<Translated> one = Translate(bytes, 1);
   ASSERT_TRUE(one.ok() && two.ok());
@@ -703,8 +707,7 @@ void ExpectEquivalentOrUnsupported(const fs::path& dir) {
   double worst = 0;
   for (const fs::path& path : files) {
     SCOPED_TRACE(path.string());
-    std::ifstream in(path, std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string bytes = ReadBytes(path);
     Result<ReadShape> occt = ReadWithOcct(bytes, path.string(), path.filename().string());
     Result<Translated> ours = Translate(bytes);
     if (!occt.ok()) {

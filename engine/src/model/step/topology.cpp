@@ -1052,6 +1052,12 @@ struct EdgeRange {
 // Shared raw edges (by TShape) -> the range a face's fixing cut them to.
 using EdgeRanges = std::map<const TopoDS_TShape*, EdgeRange>;
 
+// Sets the range of `rep` when it is a curve (3D or on a surface), as BRep_Builder::Range does.
+void SetRange(const Handle(BRep_CurveRepresentation) & rep, const EdgeRange& range) {
+  Handle(BRep_GCurve) curve = Handle(BRep_GCurve)::DownCast(rep);
+  if (!curve.IsNull()) curve->SetRange(range.first, range.last);
+}
+
 // What the fixing of a face finds of its shared edges and vertices, as the faces fixed before
 // it in OCCT's order left them: cut ranges, raised tolerances.
 struct FoundState {
@@ -1068,8 +1074,9 @@ struct FaceJob {
   BrepItem* item = nullptr;
   size_t item_index = 0;
   size_t order = 0;  // its place among the item's faces, the order OCCT's shell tool fixes them in
-  // The shared edges whose range earlier faces' fixing cut, as this face's fixing found them
-  // (OCCT's ShapeFix_SplitTool::CutEdge sets every representation's range of an edge in place).
+  // Its shared edges and vertices as the faces before it left them for its fixing: cut ranges
+  // (OCCT's ShapeFix_SplitTool::CutEdge sets every representation's range of an edge in place)
+  // and raised tolerances. Empty outside items whose faces go in order.
   FoundState found;
   EdgeRanges cut;     // the shared edges whose range this face's fixing cut, and to what
   TopoDS_Face raw;    // the face as it occurs in its shell
@@ -1127,8 +1134,7 @@ TopoDS_Shape CopyEdge(const TopoDS_Shape& edge, const Handle(Geom_Surface) & sur
   // As BRep_Builder::Range(edge, first, last) left it for the faces fixed after the cut.
   if (const auto found = state.ranges.find(raw.get()); found != state.ranges.end()) {
     for (BRep_ListIteratorOfListOfCurveRepresentation it(te->Curves()); it.More(); it.Next())
-      if (Handle(BRep_GCurve) curve = Handle(BRep_GCurve)::DownCast(it.Value()); !curve.IsNull())
-        curve->SetRange(found->second.first, found->second.last);
+      SetRange(it.Value(), found->second);
   }
   te->Tolerance(raw->Tolerance());
   if (const auto raised = state.tolerances.find(raw.get()); raised != state.tolerances.end())
@@ -1513,14 +1519,10 @@ class Merger {
     // The last cut of the edge's range, in the faces' order: it set every representation's range
     // then, those of the faces fixed before it too.
     const auto cut = last_cut_.find(source.get());
-    auto cut_range = [&](const Handle(BRep_CurveRepresentation) & rep) {
-      Handle(BRep_GCurve) curve = Handle(BRep_GCurve)::DownCast(rep);
-      if (!curve.IsNull()) curve->SetRange(cut->second.first.first, cut->second.first.last);
-    };
     for (BRep_ListIteratorOfListOfCurveRepresentation it(source->Curves()); it.More(); it.Next()) {
       if (!it.Value()->IsCurve3D()) continue;
       te->ChangeCurves().Append(it.Value()->Copy());
-      if (cut != last_cut_.end()) cut_range(te->ChangeCurves().Last());
+      if (cut != last_cut_.end()) SetRange(te->ChangeCurves().Last(), cut->second.first);
     }
     double tolerance = 0.;
     bool same_parameter = true, same_range = true;
@@ -1534,7 +1536,7 @@ class Merger {
         if (it.Value()->IsCurve3D()) continue;
         te->ChangeCurves().Append(it.Value()->Copy());
         if (cut != last_cut_.end() && job->order < cut->second.second)
-          cut_range(te->ChangeCurves().Last());
+          SetRange(te->ChangeCurves().Last(), cut->second.first);
       }
       tolerance = std::max(tolerance, he->Tolerance());
       same_parameter = same_parameter && he->SameParameter();
