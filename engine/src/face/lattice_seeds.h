@@ -1,8 +1,9 @@
 #pragma once
-// Interior seeds for a sphere face at a given deviation, laid out as a triangular lattice whose
-// equilateral triangles stand just within the deviation: a closed sphere takes a geodesic
+// Interior seeds for a sphere or torus face at a given deviation, laid out as a triangular
+// lattice whose triangles stand just within the deviation: a closed sphere takes a geodesic
 // lattice (an icosahedron's faces divided in the Goldberg-Coxeter way, relaxed to equal
-// edges), a partial one rings of latitude. Refinement starts from there instead of splitting
+// edges), a partial one rings of latitude, a torus rows about its axis spaced by its two
+// curvatures. Refinement starts from there instead of splitting
 // its way down from a coarse triangulation and then collapsing most of what it made: the
 // interpolating minimum is a mesh of equal equilateral triangles, which such a lattice comes
 // close to.
@@ -24,5 +25,14 @@ namespace rdmesh {
 /// SeedPoints serves) or when it would need more than `max_seeds` seeds.
 std::vector<Vec2> SphereLatticeSeeds(const FaceDomain& domain, Surface& surface,
                                      double max_deviation, size_t max_seeds);
+
+/// Lattice seeds for a face whose surface is a torus in OCCT's parameters (u about the axis, v
+/// about the tube) on `surface`: rows of constant v one lattice row apart, each with the points
+/// its curvature along the row allows, for triangles within kTorusFill of `max_deviation` (a
+/// triangle equilateral in the metric of the principal curvatures; on the inner, saddle half,
+/// longer along the rows). Empty for a self-intersecting torus, a coarse request (a row step
+/// over pi/8) or more than `max_seeds` seeds.
+std::vector<Vec2> TorusLatticeSeeds(const FaceDomain& domain, Surface& surface,
+                                    double max_deviation, size_t max_seeds);
 
 }  // namespace rdmesh
