@@ -28,12 +28,15 @@ constexpr int kRelaxRounds = 100;
 constexpr double kRelaxStep = 0.2;
 constexpr double kRelaxMomentum = 0.9;
 
-// The sphere's radius, from one chord along a meridian (exact for a sphere: a chord spanning
-// 2h of latitude is 2 R sin h), so that a scaled placement is taken into account.
+// The radius of a circle through S(a) and S(b), 2h of its turn apart (a chord spanning 2h of a
+// circle of radius R is 2 R sin h), so that a scaled placement is taken into account.
+constexpr double kChordHalfTurn = 0.25;
+
+double ChordRadius(Vec3 a, Vec3 b) { return Dist(a, b) / (2 * std::sin(kChordHalfTurn)); }
+
+// The sphere's radius, from one chord along a meridian.
 double MeridianRadius(Surface& s, double u) {
-  const double h = 0.25;
-  const double chord = Dist(s.Point(u, -h), s.Point(u, h));
-  return chord / (2 * std::sin(h));
+  return ChordRadius(s.Point(u, -kChordHalfTurn), s.Point(u, kChordHalfTurn));
 }
 
 // The unit icosahedron with vertex 0 at the north pole and 11 at the south pole; its faces are
@@ -291,18 +294,17 @@ std::vector<Vec2> GeodesicSeeds(const FaceDomain& d, Surface& s, double max_devi
 // more triangles than 0.9 on the tori of 24 models at 1e-3; docs/TUNING.md).
 constexpr double kTorusFill = 0.9;
 
-// The torus's radii from chords (exact on a torus in OCCT's parameters: u turns about the axis,
-// v about the tube), so that a scaled placement is taken into account: the tube's radius r from
-// a chord along v, the major radius R from a chord along u on the outer equator (radius R + r).
+// The torus's radii from chords (OCCT's parameters: u turns about the axis, v about the tube):
+// the tube's radius r from a chord along v (as a sphere's meridian), the major radius R from a
+// chord along u on the outer equator (radius R + r).
 struct TorusRadii {
   double major = 0, minor = 0;
 };
 
 TorusRadii RadiiOf(Surface& s, double u) {
-  const double h = 0.25;
   TorusRadii t;
-  t.minor = Dist(s.Point(u, -h), s.Point(u, h)) / (2 * std::sin(h));
-  t.major = Dist(s.Point(u - h, 0), s.Point(u + h, 0)) / (2 * std::sin(h)) - t.minor;
+  t.minor = MeridianRadius(s, u);
+  t.major = ChordRadius(s.Point(u - kChordHalfTurn, 0), s.Point(u + kChordHalfTurn, 0)) - t.minor;
   return t;
 }
 
@@ -313,6 +315,9 @@ std::vector<Vec2> TorusLatticeSeeds(const FaceDomain& d, Surface& s, double max_
   std::vector<Vec2> seeds;
   const TorusRadii t = RadiiOf(s, 0.5 * (d.umin + d.umax));
   const double dev = kTorusFill * max_deviation;
+  // A deviation of a quarter of the tube's radius or more is a coarse request (fewer than six
+  // rows about the tube): the grid of SeedPoints serves. (The sphere's limit, a lattice edge of
+  // pi/8, left most KiCad leads' thin tubes without a lattice at 1e-3.)
   if (!(max_deviation > 0) || d.segments.empty() || !(t.minor > 0) || !(t.major > t.minor) ||
       !(dev < 0.25 * t.minor))
     return seeds;
@@ -321,11 +326,7 @@ std::vector<Vec2> TorusLatticeSeeds(const FaceDomain& d, Surface& s, double max_
   // the metric of the curvatures (|k_u|, 1/r) whose interpolation error is dev has circumradius
   // sqrt(2 dev) there, edge sqrt(6 dev) and row height sqrt(4.5 dev).
   const double row_3d = std::sqrt(4.5 * dev * t.minor);
-  const int rows = std::max(3, static_cast<int>(std::lround(2 * M_PI * t.minor / row_3d)));
-  const double dv = 2 * M_PI / rows;
-  // Fewer than six rows about the tube is a coarse request: the grid of SeedPoints serves. (The
-  // sphere's limit, pi/8, left most KiCad leads' thin tubes without a lattice at 1e-3.)
-  if (!(dv <= M_PI / 3)) return seeds;
+  const double dv = 2 * M_PI / std::lround(2 * M_PI * t.minor / row_3d);
   // Along a row the curvature is cos v / (R + r cos v): an edge of metric length sqrt(6 dev)
   // (sqrt(8 dev) where the torus is a saddle, whose error is the sagitta of its edges along a
   // principal direction) turns du = a / sqrt(|cos v| (R + r cos v)); at most pi/8, where the

@@ -30,8 +30,8 @@ std::vector<Vec2> SphereLatticeSeeds(const FaceDomain& domain, Surface& surface,
 /// about the tube) on `surface`: rows of constant v one lattice row apart, each with the points
 /// its curvature along the row allows, for triangles within kTorusFill of `max_deviation` (a
 /// triangle equilateral in the metric of the principal curvatures; on the inner, saddle half,
-/// longer along the rows). Empty for a self-intersecting torus, a coarse request (a row step
-/// over pi/8) or more than `max_seeds` seeds.
+/// longer along the rows). Empty for a self-intersecting torus, a coarse request (0.9 x the
+/// deviation at a quarter of the tube's radius or more) or more than `max_seeds` seeds.
 std::vector<Vec2> TorusLatticeSeeds(const FaceDomain& domain, Surface& surface,
                                     double max_deviation, size_t max_seeds);
 
