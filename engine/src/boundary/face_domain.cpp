@@ -662,6 +662,61 @@ std::string DescribeConflict(const FaceDomain& d, const DomainConflict& c) {
          " cross or touch" + at;
 }
 
+int AddSingularLines(const std::vector<SingularLine>& lines, FaceDomain* d) {
+  // Pieces per part at first: refinement splits them where the fans around the point need it.
+  constexpr int kLinePieces = 4;
+  const int loop_nodes = static_cast<int>(d->uv.size());
+  int added = 0;
+  for (const SingularLine& line : lines) {
+    auto across = [&](Vec2 q) { return line.axis == 0 ? q.y : q.x; };
+    auto along = [&](Vec2 q) { return line.axis == 0 ? q.x : q.y; };
+    const double eps = 1e-9 * (line.axis == 0 ? d->vmax - d->vmin : d->umax - d->umin);
+    bool crossed = false;
+    for (const auto& s : d->segments) {
+      const double a = across(d->uv[s[0]]) - line.at, b = across(d->uv[s[1]]) - line.at;
+      crossed = crossed || (a > eps && b < -eps) || (a < -eps && b > eps);
+    }
+    if (crossed) continue;
+    std::vector<int> on;
+    for (int i = 0; i < loop_nodes; ++i)
+      if (std::fabs(across(d->uv[i]) - line.at) <= eps) on.push_back(i);
+    std::sort(on.begin(), on.end(),
+              [&](int a, int b) { return along(d->uv[a]) < along(d->uv[b]); });
+    const double extent = line.axis == 0 ? d->umax - d->umin : d->vmax - d->vmin;
+    for (size_t k = 0; k + 1 < on.size(); ++k) {
+      const int p = on[k], q = on[k + 1];
+      const double a = along(d->uv[p]), b = along(d->uv[q]);
+      if (!(b - a > 1e-9 * extent)) continue;
+      Vec2 mid = 0.5 * (d->uv[p] + d->uv[q]);
+      (line.axis == 0 ? mid.y : mid.x) = line.at;
+      if (!InsideDomain(*d, mid)) continue;
+      // Not along a boundary segment that lies on the line.
+      bool on_boundary = false;
+      for (const auto& s : d->segments)
+        on_boundary = on_boundary || (std::fabs(across(d->uv[s[0]]) - line.at) <= eps &&
+                                      std::fabs(across(d->uv[s[1]]) - line.at) <= eps &&
+                                      std::min(along(d->uv[s[0]]), along(d->uv[s[1]])) < b &&
+                                      std::max(along(d->uv[s[0]]), along(d->uv[s[1]])) > a);
+      if (on_boundary) continue;
+      int prev = p;
+      for (int j = 1; j < kLinePieces; ++j) {
+        Vec2 x = d->uv[p];
+        (line.axis == 0 ? x.x : x.y) = a + (b - a) * j / kLinePieces;
+        (line.axis == 0 ? x.y : x.x) = line.at;
+        d->uv.push_back(x);
+        d->xyz.push_back(d->xyz[p]);
+        d->ref.push_back(NodeRef{});
+        const int n = static_cast<int>(d->uv.size()) - 1;
+        d->line_segments.push_back({prev, n});
+        prev = n;
+      }
+      d->line_segments.push_back({prev, q});
+      ++added;
+    }
+  }
+  return added;
+}
+
 bool InsideDomain(const FaceDomain& d, Vec2 p) {
   bool inside = false;
   for (const auto& s : d.segments) {

@@ -12,6 +12,7 @@
 #include "boundary/node_ref.h"
 #include "boundary/pcurves.h"
 #include "core/geom.h"
+#include "geometry/singular_lines.h"
 #include "geometry/surface.h"
 #include "rdmesh/context.h"
 #include "rdmesh/status.h"
@@ -36,6 +37,9 @@ struct FaceDomain {
   std::vector<int> segment_edge, segment_grid_index;
   /// Segments of loop k are [loop_begin[k], loop_begin[k + 1]), the last up to segments.size().
   std::vector<int> loop_begin;
+  /// Singular lines inside the face (AddSingularLines): node index pairs, constraints of the
+  /// triangulation with the face on both sides; their nodes come after the loops' nodes.
+  std::vector<std::array<int, 2>> line_segments;
   double scale_u = 1, scale_v = 1;                ///< multiply u, v by these for isotropic 2D tests
   double umin = 0, umax = 0, vmin = 0, vmax = 0;  ///< bounds of the boundary nodes
 };
@@ -100,6 +104,13 @@ std::string DescribeConflict(const FaceDomain& domain, const DomainConflict& con
 /// even parts, so that the pole of such a nose gets a ring of seeds at one distance instead of
 /// fans across the whole nose, and the blend gets lines of its own.
 std::vector<Vec2> SeedPoints(const FaceDomain& domain, Surface& surface);
+
+/// Adds the parts of `lines` (the face's singular lines, FindSingularLines) that run inside the
+/// domain between two of its boundary nodes as line segments, through kLinePieces - 1 nodes of
+/// their own at the first end's point (the line is one point in 3D). A line that a boundary
+/// segment crosses between nodes (its edges were not pinned there: PinSingularLines) is left
+/// out, and the face is meshed as if it had none. Returns how many parts were added.
+int AddSingularLines(const std::vector<SingularLine>& lines, FaceDomain* domain);
 
 /// True when p lies inside the domain (even-odd rule over all boundary segments).
 bool InsideDomain(const FaceDomain& domain, Vec2 p);

@@ -10,6 +10,7 @@
 
 #include "boundary/edge_grids.h"
 #include "boundary/pcurves.h"
+#include "geometry/singular_lines.h"
 #include "rdmesh/context.h"
 #include "rdmesh/status.h"
 
@@ -28,5 +29,21 @@ struct HealStats {
 Status HealEdgeGrids(const Model& model, const FacePcurves& pcurves, const std::vector<int>& faces,
                      bool nurbs, int threads, Context* context, std::vector<EdgeGrid>* grids,
                      HealStats* stats = nullptr);
+
+/// Per face id - 1: the singular lines of `faces` (FindSingularLines), looked for in parallel;
+/// none with `nurbs` (the conversion's parameters are not the pcurves') or for other faces.
+std::vector<std::vector<SingularLine>> FaceSingularLines(const Model& model,
+                                                         const FacePcurves& pcurves,
+                                                         const std::vector<int>& faces, bool nurbs,
+                                                         int threads);
+
+/// Gives every edge grid a point where the edge's pcurve on a face crosses one of that face's
+/// singular lines (`lines` per face id - 1), in every edge that shares the edge's TShape: a line
+/// can only be kept out of the triangles between two boundary nodes on it, and the neighbouring
+/// faces take the same point, so the mesh stays watertight. A crossing that a grid point already
+/// lies on adds nothing. Returns how many points were added.
+int PinSingularLines(const Model& model, const FacePcurves& pcurves,
+                     const std::vector<std::vector<SingularLine>>& lines,
+                     std::vector<EdgeGrid>* grids);
 
 }  // namespace rdmesh

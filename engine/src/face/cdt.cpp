@@ -5,6 +5,7 @@
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
+#include <algorithm>
 #include <list>
 #include <map>
 
@@ -26,8 +27,17 @@ using Itag = CGAL::No_constraint_intersection_requiring_constructions_tag;
 using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, Itag>;
 using Point = Cdt::Point;
 
-// Flood fill from the infinite face: crossing a constraint raises the nesting level.
-void MarkDomains(Cdt& cdt) {
+// Flood fill from the infinite face: crossing a constraint raises the nesting level, but for
+// `inner` ones (sorted pairs of vertex infos, which are point index + 1).
+void MarkDomains(Cdt& cdt, const std::vector<std::pair<int, int>>& inner) {
+  auto bounds = [&](const Cdt::Edge& e) {
+    if (!cdt.is_constrained(e)) return false;
+    if (inner.empty()) return true;
+    const int a = e.first->vertex(Cdt::cw(e.second))->info();
+    const int b = e.first->vertex(Cdt::ccw(e.second))->info();
+    return !std::binary_search(inner.begin(), inner.end(),
+                               std::make_pair(std::min(a, b), std::max(a, b)));
+  };
   for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info().nesting_level = -1;
   std::list<Cdt::Edge> border;
   auto fill = [&](Cdt::Face_handle start, int level) {
@@ -42,7 +52,7 @@ void MarkDomains(Cdt& cdt) {
         Cdt::Edge e(fh, i);
         Cdt::Face_handle n = fh->neighbor(i);
         if (n->info().nesting_level == -1) {
-          if (cdt.is_constrained(e))
+          if (bounds(e))
             border.push_back(e);
           else
             queue.push_back(n);
@@ -63,6 +73,7 @@ void MarkDomains(Cdt& cdt) {
 
 Status ConstrainedTriangulation(const std::vector<Vec2>& points,
                                 const std::vector<std::array<int, 2>>& segments,
+                                const std::vector<std::array<int, 2>>& inner,
                                 const Context* context, CdtResult* result) {
   result->triangles.clear();
   result->constrained.clear();
@@ -80,18 +91,23 @@ Status ConstrainedTriangulation(const std::vector<Vec2>& points,
         return Status(StatusCode::kInternal, "two boundary nodes coincide in (u,v)");
       handles[i]->info() = static_cast<int>(i) + 1;
     }
-    for (size_t k = 0; k < segments.size(); ++k) {
-      if (context && context->ShouldStop()) return context->StopStatus();
-      const auto& s = segments[k];
-      if (s[0] == s[1]) continue;
-      cdt.insert_constraint(handles[s[0]], handles[s[1]]);
+    for (const auto* list : {&segments, &inner}) {
+      for (const auto& s : *list) {
+        if (context && context->ShouldStop()) return context->StopStatus();
+        if (s[0] == s[1]) continue;
+        cdt.insert_constraint(handles[s[0]], handles[s[1]]);
+      }
     }
+    std::vector<std::pair<int, int>> inner_pairs;
+    for (const auto& s : inner)
+      inner_pairs.push_back({std::min(s[0], s[1]) + 1, std::max(s[0], s[1]) + 1});
+    std::sort(inner_pairs.begin(), inner_pairs.end());
     if (cdt.number_of_vertices() != points.size())
       return Status(StatusCode::kInternal, "the boundary loops overlap in (u,v)");
     // Points all on one line leave no face to mark (and CGAL's faces are not set up for it).
     if (cdt.dimension() < 2)
       return Status(StatusCode::kInternal, "the boundary loops enclose no area in (u,v)");
-    MarkDomains(cdt);
+    MarkDomains(cdt, inner_pairs);
     for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
       if (!f->info().in_domain()) continue;
       std::array<int, 3> t;

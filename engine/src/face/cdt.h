@@ -19,10 +19,18 @@ struct CdtResult {
 };
 
 /// Triangulates the region bounded by `segments` (point index pairs; holes by the even-odd
-/// nesting rule). Points must be distinct; segments must not cross. Fails with a reason
+/// nesting rule). `inner` segments are constraints inside the region, with it on both sides
+/// (they bound nothing). Points must be distinct; segments must not cross. Fails with a reason
 /// otherwise, or with the context's stop status when it asks to stop (`context` may be null).
 Status ConstrainedTriangulation(const std::vector<Vec2>& points,
                                 const std::vector<std::array<int, 2>>& segments,
+                                const std::vector<std::array<int, 2>>& inner,
                                 const Context* context, CdtResult* result);
+/// The same without inner segments.
+inline Status ConstrainedTriangulation(const std::vector<Vec2>& points,
+                                       const std::vector<std::array<int, 2>>& segments,
+                                       const Context* context, CdtResult* result) {
+  return ConstrainedTriangulation(points, segments, {}, context, result);
+}
 
 }  // namespace rdmesh

@@ -49,10 +49,11 @@ double TriangleArea(const FaceMesh& f, int t) {
 }
 
 // Compacts the live part of the working mesh into a FaceMesh, oriented outward. Triangles with
-// two corners at one point (at a pole) vanish.
+// two corners at one point (at a pole) vanish; with `drop_pole_edges` (a face with singular
+// lines, whose ends are two edges' points, equal up to rounding) so do all on a pole edge.
 // `deviation` holds the estimated deviation of each working-mesh triangle (RefineStats).
-void Extract(const WorkMesh& m, const std::vector<double>& deviation, bool reversed, FaceMesh* f,
-             std::vector<NodeRef>* refs) {
+void Extract(const WorkMesh& m, const std::vector<double>& deviation, bool reversed,
+             bool drop_pole_edges, FaceMesh* f, std::vector<NodeRef>* refs) {
   std::vector<int> index(m.node_count(), -1);
   f->xyz.reserve(3 * m.node_count());
   f->uv.reserve(2 * m.node_count());
@@ -66,6 +67,10 @@ void Extract(const WorkMesh& m, const std::vector<double>& deviation, bool rever
     const Vec3 &a = m.xyz[x[0]], &b = m.xyz[x[1]], &c = m.xyz[x[2]];
     auto same = [](const Vec3& p, const Vec3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; };
     if (same(a, b) || same(b, c) || same(c, a)) continue;
+    if (drop_pole_edges &&
+        (m.kind[t][0] == EdgeKind::kSplittable || m.kind[t][1] == EdgeKind::kSplittable ||
+         m.kind[t][2] == EdgeKind::kSplittable))
+      continue;
     int32_t ids[3];
     for (int i = 0; i < 3; ++i) {
       int v = x[i];
@@ -232,6 +237,8 @@ class FaceRun {
     for (const DomainConflict& c : conflicts) no_area = no_area && c.b < 0;
     if (no_area && NoWidth()) return false;  // done: ok, with no triangles
     if (!conflicts.empty()) return Fail(DescribeConflict(domain_, conflicts.front()));
+    if (job_.singular_lines && !job_.nurbs)
+      AddSingularLines((*job_.singular_lines)[face_id_ - 1], &domain_);
     return true;
   }
 
@@ -340,6 +347,8 @@ class FaceRun {
   bool LeaveSurface() {
     const double deviation = job_.criteria.max_deviation;
     if (!(deviation > 0) || surface_->planar) return KeepOn("a plane does not bend");
+    // Its offset would tear where the normal reverses.
+    if (!domain_.line_segments.empty()) return KeepOn("its surface collapses along a line");
     const int side = job_.bend_sides ? (*job_.bend_sides)[face_id_ - 1] : 0;
     if (side != 0) {
       offset_ = side * kOffSurfaceShare * deviation;
@@ -576,7 +585,8 @@ class FaceRun {
   // The face's triangles, oriented as the face, with exact normals (at poles too) and the
   // working mesh's node references.
   bool Extract(std::vector<NodeRef>* refs) {
-    rdmesh::Extract(mesh_, stats_.deviation, face_.Orientation() == TopAbs_REVERSED, &f_, refs);
+    rdmesh::Extract(mesh_, stats_.deviation, face_.Orientation() == TopAbs_REVERSED,
+                    !domain_.line_segments.empty(), &f_, refs);
     if (f_.triangles.empty()) return Fail("no triangles survived");
     if (Stopping()) return Stop();
     if (!job_.nurbs) ExactPoleNormals(face_, *refs, &f_);

@@ -12,6 +12,7 @@
 #include "boundary/node_ref.h"
 #include "boundary/pcurves.h"
 #include "face/measure.h"
+#include "geometry/singular_lines.h"
 #include "rdmesh/context.h"
 #include "rdmesh/mesh.h"
 #include "rdmesh/status.h"
@@ -49,6 +50,9 @@ struct FaceJob {
   /// moved with their edges (MoveEdgeGrids), which the face's domain takes.
   const std::vector<int8_t>* bend_sides = nullptr;
   const std::map<int, Vec3>* moved_vertices = nullptr;
+  /// Per face id - 1, its singular lines (FaceSingularLines), whose crossings with its edges
+  /// are in the grids (PinSingularLines); null = none.
+  const std::vector<std::vector<SingularLine>>* singular_lines = nullptr;
   /// Evaluators shared with other runs on the model (levels of detail); null = made per face.
   FaceSurfaces* surfaces = nullptr;
 };

@@ -12,6 +12,17 @@ namespace {
 
 bool Stopping(const Context* context) { return context && context->ShouldStop(); }
 
+// Seeds closer than this (of the scaled domain's size) to a singular line are left out.
+constexpr double kLineClearance = 0.01;
+
+double SegmentDistance(Vec2 p, Vec2 a, Vec2 b) {
+  const Vec2 d = b - a, w = p - a;
+  const double len2 = d.x * d.x + d.y * d.y;
+  const double s = len2 > 0 ? std::clamp((w.x * d.x + w.y * d.y) / len2, 0.0, 1.0) : 0.0;
+  const Vec2 foot = a + s * d;
+  return std::hypot(p.x - foot.x, p.y - foot.y);
+}
+
 }  // namespace
 
 Status TriangulateDomain(const FaceDomain& domain, const std::vector<Vec2>& seeds, Surface& surface,
@@ -20,9 +31,29 @@ Status TriangulateDomain(const FaceDomain& domain, const std::vector<Vec2>& seed
   std::vector<Vec2> points;
   points.reserve(domain.uv.size() + seeds.size());
   for (const Vec2& p : domain.uv) points.push_back({p.x * domain.scale_u, p.y * domain.scale_v});
-  for (const Vec2& p : seeds) points.push_back({p.x * domain.scale_u, p.y * domain.scale_v});
+  // A seed on or beside a singular line would split its constraint, or make slivers across it.
+  std::vector<Vec2> kept;
+  const std::vector<Vec2>* seeds_used = &seeds;
+  if (!domain.line_segments.empty()) {
+    const double clear = kLineClearance * std::max((domain.umax - domain.umin) * domain.scale_u,
+                                                   (domain.vmax - domain.vmin) * domain.scale_v);
+    for (const Vec2& p : seeds) {
+      bool near = false;
+      for (const auto& s : domain.line_segments) {
+        const Vec2 a = domain.uv[s[0]], b = domain.uv[s[1]];
+        const Vec2 sa = {a.x * domain.scale_u, a.y * domain.scale_v};
+        const Vec2 sb = {b.x * domain.scale_u, b.y * domain.scale_v};
+        near =
+            near || SegmentDistance({p.x * domain.scale_u, p.y * domain.scale_v}, sa, sb) < clear;
+      }
+      if (!near) kept.push_back(p);
+    }
+    seeds_used = &kept;
+  }
+  for (const Vec2& p : *seeds_used) points.push_back({p.x * domain.scale_u, p.y * domain.scale_v});
   CdtResult cdt;
-  Status st = ConstrainedTriangulation(points, domain.segments, context, &cdt);
+  Status st =
+      ConstrainedTriangulation(points, domain.segments, domain.line_segments, context, &cdt);
   if (Stopping(context)) return context->StopStatus();
   if (!st.ok()) return st;
   // A face of 10^5 boundary nodes (absurd options) spends seconds here under a sanitizer:
@@ -33,14 +64,15 @@ Status TriangulateDomain(const FaceDomain& domain, const std::vector<Vec2>& seed
     mesh->AddNode(q, domain.xyz[i], surface.Normal(q.x, q.y), true, domain.ref[i]);
     if (stop_every(i)) return context->StopStatus();
   }
-  for (size_t i = 0; i < seeds.size(); ++i) {
-    const Vec2& q = seeds[i];
+  for (size_t i = 0; i < seeds_used->size(); ++i) {
+    const Vec2& q = (*seeds_used)[i];
     mesh->AddNode(q, surface.Point(q.x, q.y), surface.Normal(q.x, q.y), false, NodeRef{});
     if (stop_every(i)) return context->StopStatus();
   }
   std::vector<std::array<int, 2>> splittable;
   for (size_t s = 0; s < domain.segments.size(); ++s)
     if (domain.segment_splittable[s]) splittable.push_back(domain.segments[s]);
+  splittable.insert(splittable.end(), domain.line_segments.begin(), domain.line_segments.end());
   InitWorkMesh(cdt.triangles, cdt.constrained, splittable, mesh);
   if (Stopping(context)) return context->StopStatus();
   return Status::Ok();

@@ -98,6 +98,11 @@ Status Refiner::SplitViolating(int64_t max_triangles) {
 Status Refiner::Verify(int64_t max_triangles) {
   if (!(criteria_.max_deviation > 0) || surface_.planar) return Status::Ok();
   std::vector<uint32_t> checked;  // per triangle: stamp_ when it was last checked (+1; 0 never)
+  // A face with singular lines (interior pole nodes): a fan triangle at one of its nodes stands
+  // for the patch MeasureCorners gives it, and is read; one on the line itself is not.
+  bool lines = false;
+  for (int v = 0; v < mesh_.node_count() && !lines; ++v)
+    lines = mesh_.pole_axis[v] >= 0 && mesh_.ref[v].dim == 2;
   // A surface-side reading drives splits only: where none is made, the triangle keeps its
   // mesh-side measure. The reading is an upper bound (the nearest triangle may lie beyond those
   // asked), and read 2.5x where the yardstick finds 1.008x (gmsh_wrenchnut face 6 at 3e-4).
@@ -130,8 +135,9 @@ Status Refiner::Verify(int64_t max_triangles) {
       mesh_.MeasureCorners(t, uv, p);
       const double limit = DeviationLimit(criteria_, uv);
       const Tri& tri = mesh_.tri[t];
-      if (mesh_.pole_axis[tri[0]] + mesh_.pole_axis[tri[1]] + mesh_.pole_axis[tri[2]] > -3)
-        continue;     // a pole triangle stands for no patch of its own
+      const int poles = (mesh_.pole_axis[tri[0]] >= 0) + (mesh_.pole_axis[tri[1]] >= 0) +
+                        (mesh_.pole_axis[tri[2]] >= 0);
+      if (poles > (lines ? 1 : 0)) continue;  // a pole triangle stands for no patch of its own
       int edges = 0;  // an edge grid's chord holds its own deviation, and cannot be split
       for (int i = 0; i < 3; ++i) edges |= (mesh_.kind[t][i] == EdgeKind::kFree) << i;
       Vec2 where;

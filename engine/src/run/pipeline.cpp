@@ -124,9 +124,10 @@ Status MakeEdgeGrids(const Model& model, const FacePcurves& pcurves, const MeshO
 // 5. Mesh faces, in parallel; each slot is written by one task.
 Status MeshFaces(const Model& model, const FacePcurves& pcurves, const MeshOptions& options,
                  double deviation, const Selection& sel, const std::vector<EdgeGrid>& grids,
-                 const OffSurfacePlan& plan, FaceSurfaces* surfaces, Context* context,
-                 FaceReporter* reporter, std::vector<FaceMesh>* faces,
-                 std::vector<std::vector<NodeRef>>* refs) {
+                 const OffSurfacePlan& plan,
+                 const std::vector<std::vector<SingularLine>>& singular_lines,
+                 FaceSurfaces* surfaces, Context* context, FaceReporter* reporter,
+                 std::vector<FaceMesh>* faces, std::vector<std::vector<NodeRef>>* refs) {
   FaceJob job;
   job.criteria.max_deviation = deviation;
   job.criteria.rd_tolerance = options.rd_tolerance;
@@ -137,6 +138,7 @@ Status MeshFaces(const Model& model, const FacePcurves& pcurves, const MeshOptio
   job.off_surface = options.off_surface;
   job.bend_sides = &plan.bend_sides;
   job.moved_vertices = &plan.moved_vertices;
+  job.singular_lines = &singular_lines;
   job.surfaces = surfaces;
   const ParallelRunner runner(options.threads);
   runner.For(
@@ -250,6 +252,11 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   std::vector<EdgeGrid> grids;
   Status st = MakeEdgeGrids(model, pcurves, options, deviation, *sel, plan, context, &grids);
   if (!st.ok()) return st;
+  // Lines the surface collapses to a point: the faces keep their triangles off them, from
+  // grid points where their edges cross them.
+  const std::vector<std::vector<SingularLine>> lines =
+      FaceSingularLines(model, pcurves, sel->todo, options.nurbs, options.threads);
+  PinSingularLines(model, pcurves, lines, &grids);
   // 4. Heal: split grid segments until every face's boundary loops are valid in (u,v).
   st = HealEdgeGrids(model, pcurves, sel->todo, options.nurbs, options.threads, context, &grids);
   if (!st.ok()) return st;
@@ -262,7 +269,7 @@ Result<MeshResult> MeshAtDeviation(const Model& model, const MeshOptions& option
   std::vector<std::vector<NodeRef>> refs(model.face_count());
   if (context) context->ReportProgress({Progress::Stage::kFaces, 0, total});
   FaceReporter reporter(context, total);
-  st = MeshFaces(model, pcurves, options, deviation, *sel, grids, plan, surfaces, context,
+  st = MeshFaces(model, pcurves, options, deviation, *sel, grids, plan, lines, surfaces, context,
                  &reporter, &result.faces, &refs);
   if (!st.ok()) return st;
   st = PlaceInstances(model, pcurves, *sel, grids, options.threads, context, &reporter,
