@@ -123,25 +123,18 @@ TRIAGE = {
         "0.267 each): the loop that RepairLoosePcurves projects onto the surface encloses a "
         "part of the face; BRepExtrema agrees the worst sample is 0.0069 off face 9."),
     "SSO-4_6.7x5.1mm": (
-        "8 faces (20, 21, 33, 35, 42, 46, 68, 71) are bilinear B-spline patches (degree 1x1, "
-        "2x2 poles) twisted into a bow-tie: the surface's normal flips inside the face, where "
-        "dS/du vanishes; the refinement splits there without end (face 20 alone, planar: 256 "
-        "triangles, 2.4 s CPU, 'could not be refined to the criteria without folding'; the "
-        "whole file: 109 s CPU on one thread and not done). perf: Measure 23%, "
-        "CachedSurface::Point 15%, OcctSurface::Point 7%, TriangleAgreement 7%. Since 220b18e "
-        "(kFoldRun: a fold that 5 splits in a row handed on is left unsplit and reported) every "
-        "face meshes: 1,172 triangles, 192 inverted, hausdorff_rel 8.7e-4, 7.0 s CPU, where "
-        "b53f6d1's build made 65,352 triangles with 30,062 inverted in 17.2 s CPU (rdmesh mesh "
-        "FILE --threads 1 --json, mesh_cpu_seconds; meshbench eval); since b59805c (a fold "
-        "across which the normal jumps is left after one split) 1,000 triangles, 166 "
-        "inverted, 7.9 s CPU; since 8c786e8 (a face stuck on dozens of folds is not started "
-        "again) the same mesh in 0.056 s; since the flips after refinement (face_mesher.cpp "
-        "RepairFolds) 136 inverted."),
+        "8 faces (20, 21, 33, 35, 42, 46, 68, 71) are planar bilinear B-spline patches "
+        "twisted into a bow-tie: the iso-line where dS/du vanishes is one point Q, and the "
+        "normal flips across it. Before 89b2e06 the refinement folded across it (136 inverted, "
+        "1,000 triangles; earlier builds timed out); since, the line is a constraint inside the "
+        "face (METHOD.md, singular lines): 0 inverted, 488 triangles. Its non-manifold edges "
+        "are the B-rep's: past Q the side faces beside each bow-tie (26 and 66 for face 42) "
+        "cross each other along a segment from Q to the top face's corner, and each meshes it "
+        "inside itself (self_contact)."),
     "SSO-8_6.7x9.8mm": (
-        "the bow-tie bilinear patches of SSO-4 (face 50: the normal flips at v = 0.79). Since "
-        "220b18e: 1,800 triangles, 482 inverted, 2.5 s CPU (b53f6d1's build: 34,548, 15,994, "
-        "8.3 s); since b59805c 1,632 triangles, 408 inverted, 3.1 s CPU; since 8c786e8 0.056 "
-        "s; since RepairFolds 392 inverted."),
+        "the bow-tie patches of SSO-4 (faces 50, 54, 98, 101: the line at v = 0.79). Before "
+        "89b2e06 392 inverted in 1,632 triangles; since, 0 in 740, and the side faces' crossing "
+        "past Q as in SSO-4."),
     "L_CommonMode_Toroid_Vertical_L19.3mm": (
         "face 220 (cylinder) is bounded by two edges with the same two ends that lie on each "
         "other within edge 439's tolerance 0.0039: the face has no width, and both chords are "
@@ -154,16 +147,11 @@ TRIAGE = {
         "by the yardstick, 0.0188 by BRepExtrema_DistShapeShape, 0.92x; face 105 of the 1x04: "
         "0.89x). The yardstick over-estimates here."),
     "Crystal_HC33-U_Horizontal": (
-        "faces 3 and 12 (surfaces of revolution) hold 66 and 84 inverted triangles: the "
-        "refinement's 'could not be refined to the criteria without folding' (face/refiner). "
-        "Since 220b18e: 1,166 triangles, 122 inverted (b53f6d1's build: 1,268, 150); since "
-        "b59805c (a fold across which the normal jumps is left after one split) 838 "
-        "triangles, 23 inverted (the _1EP_style2: 834, 23). The cause: each face's profile "
-        "circle (radius 0.7) crosses its axis (0.625 from its centre), so the face pinches to a "
-        "point inside itself and turns inside out there; triangles across the pinch fold. Since "
-        "RepairFolds (free edges flipped after refinement while that removes folds) 4 inverted "
-        "by the yardstick, none by the surface normals at the nodes (FaceMesherTest."
-        "FlipsUndoFoldsThatRefinementLeaves, which carries the file)."),
+        "faces 3 and 12 are a circle of radius 0.7 turned about an axis 0.625 from its centre: "
+        "the face pinches to a point on the axis twice and turns inside out there, and "
+        "triangles across the pinch folded (4 inverted with RepairFolds; 150 at b53f6d1). Since "
+        "89b2e06 the two iso-lines through the axis are constraints inside the face (METHOD.md, "
+        "singular lines): 0 inverted, 832 -> 708 triangles."),
     "Fuseholder_Schurter_0031.7701": (
         "face 132's edges lie up to 0.1 off its surface (tolerance 1e-7): 6 inverted triangles, "
         "hausdorff 0.051 (6x); rdmesh reports the B-rep. Since 220b18e: 4 inverted (b53f6d1's "
@@ -197,11 +185,8 @@ CAUSES_1E4 = {
 }
 CAUSES = {
     "timed out": (
-        "SSO-4 and SSO-8 (Package_SO, Clearance8mm): faces that are bilinear B-spline patches "
-        "twisted into a bow-tie, whose normal flips inside the face; the refinement splits there "
-        "without end (since 220b18e a fold that 5 splits in a row handed on is left unsplit, "
-        "since b59805c one across which the normal jumps after one split: SSO-4 1,000 "
-        "triangles in 7.9 s CPU, 166 inverted)."),
+        "SSO-4 and SSO-8 (Package_SO, Clearance8mm) before 220b18e: bow-tie B-spline faces "
+        "whose normal flips inside, where the refinement split without end."),
     "failed face": (
         "toroid L19.3: a cylinder face of no width, two edges with the same ends lying on each "
         "other within a 0.0039 tolerance (face_domain drops them as a pinch)."),
