@@ -54,6 +54,11 @@ constexpr double kMinChordShare = 0.05;
 // that lies within this fraction of the deviation of its faces' surfaces (GridTolerance).
 constexpr double kCurveOnSurface = 0.1;
 
+// Parameter samples over an edge's range that look for where its curve passes through a vertex
+// (ThroughVertexRange), and the golden-section steps that then close in on that point.
+constexpr int kThroughSamples = 64;
+constexpr int kThroughSteps = 60;
+
 // The length of the polyline through `samples` + 1 even parameter steps of [f, l].
 double PolylineLength(Curve& curve, double f, double l, int samples) {
   double length = 0;
@@ -64,6 +69,66 @@ double PolylineLength(Curve& curve, double f, double l, int samples) {
     prev = x;
   }
   return length;
+}
+
+// The parameter in [a, b] where the curve comes nearest to x, where it has one minimum there
+// (golden section), and that distance.
+double NearestParameter(Curve& curve, Vec3 x, double a, double b, double* distance) {
+  constexpr double kInvPhi = 0.6180339887498949;
+  double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
+  double fc = Dist(curve.Point(c), x), fd = Dist(curve.Point(d), x);
+  for (int k = 0; k < kThroughSteps; ++k) {
+    if (fc < fd) {
+      b = d, d = c, fd = fc;
+      c = b - kInvPhi * (b - a), fc = Dist(curve.Point(c), x);
+    } else {
+      a = c, c = d, fc = fd;
+      d = a + kInvPhi * (b - a), fd = Dist(curve.Point(d), x);
+    }
+  }
+  *distance = std::min(fc, fd);
+  return fc < fd ? c : d;
+}
+
+// The range an edge's grid covers: the edge's own, but where its curve passes through an end
+// vertex inside the range (within the edge's tolerance), leaves that vertex's tolerance and
+// comes back near it at the range's end, the grid ends where the curve passes through. A reader
+// that finds the range by projecting the vertex onto the curve (STEP's EDGE_CURVE) can stop on
+// the return's local minimum: KiCad's Bourns 8100 toroids have B-spline edges that run on 0.018
+// mm past their vertex and back to 2.2e-4 of it, a loop that the face next to it does not have
+// and the planar sliver beside it folds over. Closed edges (one vertex) keep their range.
+void ThroughVertexRange(const TopoDS_Edge& edge, Curve& curve, double* f, double* l) {
+  TopoDS_Vertex ends[2];
+  TopExp::Vertices(edge, ends[0], ends[1]);
+  if (ends[0].IsNull() || ends[1].IsNull() || ends[0].IsSame(ends[1])) return;
+  const double tolerance = std::max(BRep_Tool::Tolerance(edge), Precision::Confusion());
+  const double first = *f, last = *l;
+  for (int end = 0; end < 2; ++end) {
+    const gp_Pnt p = BRep_Tool::Pnt(ends[end]);
+    const Vec3 vertex{p.X(), p.Y(), p.Z()};
+    const double at = end == 0 ? first : last;
+    if (!(Dist(curve.Point(at), vertex) > tolerance)) continue;
+    double d[kThroughSamples + 1];
+    auto param = [&](int k) { return first + (last - first) * k / kThroughSamples; };
+    for (int k = 0; k <= kThroughSamples; ++k) d[k] = Dist(curve.Point(param(k)), vertex);
+    double best = HUGE_VAL, through = at;
+    int best_k = -1;
+    for (int k = 1; k < kThroughSamples; ++k) {
+      if (!(d[k] <= d[k - 1] && d[k] <= d[k + 1])) continue;
+      double distance;
+      const double t = NearestParameter(curve, vertex, param(k - 1), param(k + 1), &distance);
+      if (distance < best) best = distance, through = t, best_k = k;
+    }
+    if (best_k < 0 || !(best <= tolerance)) continue;
+    // Only a loop: a curve that stays within the vertex's tolerance past it keeps its range.
+    const double reach = BRep_Tool::Tolerance(ends[end]);
+    bool leaves = false;
+    for (int k = end == 0 ? 1 : best_k + 1; k < (end == 0 ? best_k : kThroughSamples); ++k)
+      leaves = leaves || d[k] > reach;
+    if (!leaves) continue;
+    (end == 0 ? *f : *l) = through;
+  }
+  if (!(*f < *l)) *f = first, *l = last;
 }
 
 // The two vertices of a collapsed (non-degenerate, shorter than tolerance) edge are one node:
@@ -124,7 +189,9 @@ std::vector<double> NarrowFaceLimits(const Model& model, const FacePcurves& pcur
     try {
       double t0, t1;
       BRep_Tool::Range(edge, t0, t1);
-      length[e - 1] = PolylineLength(*MakeEdgeCurve(edge), t0, t1, kWidthSamples);
+      std::unique_ptr<Curve> curve = MakeEdgeCurve(edge);
+      ThroughVertexRange(edge, *curve, &t0, &t1);
+      length[e - 1] = PolylineLength(*curve, t0, t1, kWidthSamples);
     } catch (const Standard_Failure&) {
       length[e - 1] = 0;
     }
@@ -343,17 +410,21 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
           const double tolerance =
               GridTolerance(model, edge, *curve, f, l, faces, gc.max_deviation);
           c.min_length = std::max(gc.min_length, tolerance);
+          // The gap and the tolerance above look at the whole range, the grid at its part up to
+          // where the curve passes through its vertices.
+          double a = f, b = l;
+          ThroughVertexRange(edge, *curve, &a, &b);
           // A closed edge, or one whose ends nearly meet, starts from three segments: its
           // end-to-end chord says nothing about its length.
-          Vec3 start = curve->Point(f), end = curve->Point(l), mid = curve->Point(0.5 * (f + l));
+          Vec3 start = curve->Point(a), end = curve->Point(b), mid = curve->Point(0.5 * (a + b));
           bool loops = g.first_vertex == g.last_vertex || Dist(start, end) < 0.5 * Dist(start, mid);
           c.min_segments = loops ? 3 : 1;
           c.sides = NarrowSides(model, pcurves, e, edge, faces, narrow, c.max_sagitta);
-          g.t = DiscretizeCurve(*curve, f, l, c, context);
+          g.t = DiscretizeCurve(*curve, a, b, c, context);
           // An edge no longer than its own tolerance is a point in 3D: it collapses to one node,
           // and faces see it as a pole segment (its pcurve may still span the face).
-          if (PolylineLength(*curve, f, l, kLengthSamples) <= tolerance)
-            g.t = {f, l}, g.degenerate = true;
+          if (PolylineLength(*curve, a, b, kLengthSamples) <= tolerance)
+            g.t = {a, b}, g.degenerate = true;
         }
       } else {
         g.t = (*grids)[source[e - 1] - 1].t;

@@ -398,6 +398,40 @@ void DropPinches(const Model& model, const std::vector<EdgeGrid>& grids, FaceDom
   *d = std::move(kept);
 }
 
+void SetBounds(Surface& surface, FaceDomain* d) {
+  d->umin = d->umax = d->uv[0].x;
+  d->vmin = d->vmax = d->uv[0].y;
+  for (const Vec2& p : d->uv) {
+    d->umin = std::min(d->umin, p.x), d->umax = std::max(d->umax, p.x);
+    d->vmin = std::min(d->vmin, p.y), d->vmax = std::max(d->vmax, p.y);
+  }
+  ComputeScale(surface, d);
+}
+
+// The (u,v) of the surface's point nearest `target` (Gauss-Newton from `start`, as ProjectNear,
+// but kept wherever it ends: the target may lie off the surface).
+Vec2 NearestOnSurface(Surface& s, Vec2 start, Vec3 target) {
+  const double hu = 1e-7 * std::max(s.umax - s.umin, 1e-12);
+  const double hv = 1e-7 * std::max(s.vmax - s.vmin, 1e-12);
+  Vec2 q = start;
+  double gap = Dist(s.Point(q.x, q.y), target);
+  for (int iter = 0; iter < 8 && gap > 0; ++iter) {
+    Vec3 p = s.Point(q.x, q.y);
+    Vec3 su = (1.0 / hu) * (s.Point(q.x + hu, q.y) - p);
+    Vec3 sv = (1.0 / hv) * (s.Point(q.x, q.y + hv) - p);
+    Vec3 r = target - p;
+    double a = Dot(su, su), b = Dot(su, sv), c = Dot(sv, sv);
+    double det = a * c - b * b;
+    if (!(det > 1e-24 * a * c)) break;
+    double ru = Dot(su, r), rv = Dot(sv, r);
+    Vec2 next{q.x + (c * ru - b * rv) / det, q.y + (a * rv - b * ru) / det};
+    double next_gap = Dist(s.Point(next.x, next.y), target);
+    if (!(next_gap < gap)) break;
+    q = next, gap = next_gap;
+  }
+  return q;
+}
+
 }  // namespace
 
 Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_id,
@@ -504,14 +538,37 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
   }
   DropPinches(model, grids, d);
   if (d->uv.size() < 2) return Status(StatusCode::kInternal, "the face has no boundary loop");
-  d->umin = d->umax = d->uv[0].x;
-  d->vmin = d->vmax = d->uv[0].y;
-  for (const Vec2& p : d->uv) {
-    d->umin = std::min(d->umin, p.x), d->umax = std::max(d->umax, p.x);
-    d->vmin = std::min(d->vmin, p.y), d->vmax = std::max(d->vmax, p.y);
-  }
-  ComputeScale(surface, d);
+  SetBounds(surface, d);
   return Status::Ok();
+}
+
+int MoveVertexNodesToSurface(Surface& surface, FaceDomain* d) {
+  const int nn = static_cast<int>(d->uv.size());
+  std::vector<double> shorter(nn, HUGE_VAL);
+  for (const auto& [a, b] : d->segments) {
+    const double length = Dist(d->xyz[a], d->xyz[b]);
+    shorter[a] = std::min(shorter[a], length), shorter[b] = std::min(shorter[b], length);
+  }
+  FaceDomain moved = *d;
+  std::vector<bool> is_moved(nn, false);
+  int count = 0;
+  for (int i = 0; i < nn; ++i) {
+    if (d->ref[i].dim != 0 || !(shorter[i] < HUGE_VAL)) continue;
+    const Vec2 start = d->uv[i];
+    const Vec2 q = NearestOnSurface(surface, start, d->xyz[i]);
+    const Vec3 from = surface.Point(start.x, start.y), to = surface.Point(q.x, q.y);
+    if (!(Dist(to, d->xyz[i]) < Dist(from, d->xyz[i])) ||
+        !(Dist(from, to) > kPcurveMiss * shorter[i]))
+      continue;
+    moved.uv[i] = q, is_moved[i] = true, ++count;
+  }
+  if (count == 0) return 0;
+  SetBounds(surface, &moved);
+  for (const DomainConflict& c : FindConflicts(moved))
+    for (int s : {c.a, c.b})
+      if (s >= 0 && (is_moved[moved.segments[s][0]] || is_moved[moved.segments[s][1]])) return 0;
+  *d = std::move(moved);
+  return count;
 }
 
 double BoundaryGap(const FaceDomain& domain, Surface& surface) {

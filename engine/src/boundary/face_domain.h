@@ -56,6 +56,14 @@ struct FaceDomain {
 Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_id,
                        const std::vector<EdgeGrid>& grids, Surface& surface, FaceDomain* domain);
 
+/// A vertex node's (u,v) is a pcurve's end and its point the vertex's, which the B-rep lets lie
+/// as far from that end as the vertex's tolerance. Moves each vertex node whose nearest surface
+/// point lies farther along the surface from its pcurve end than kPcurveMiss (1%) of its shorter
+/// boundary segment to that point's (u,v), as interior grid points are moved where their pcurve
+/// misses them; undoes them all where that makes boundary segments at a moved node conflict
+/// (FindConflicts). Returns how many nodes moved.
+int MoveVertexNodesToSurface(Surface& surface, FaceDomain* domain);
+
 /// How far the domain's nodes (points of the edges' 3D curves, shared with the neighbouring
 /// faces) lie off the surface at their (u,v): the largest |(xyz - S(uv)) . N(uv)|. The B-rep lets
 /// it reach the edge and vertex tolerances; the mesh's triangles along such an edge lean from its

@@ -10,7 +10,11 @@
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <GC_MakeArcOfCircle.hxx>
+#include <GeomAPI_Interpolate.hxx>
+#include <Geom_BSplineCurve.hxx>
 #include <Geom_Circle.hxx>
+#include <TColStd_HArray1OfReal.hxx>
+#include <TColgp_HArray1OfPnt.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
@@ -155,6 +159,60 @@ TEST(GridsTest, ChordsLeaveRoomForAnEdgePastItsSurfacesRange) {
   ASSERT_NO_FATAL_FAILURE(RimSagitta(face, 0.15, &sagitta));
   EXPECT_LE(sagitta, 0.05 * 1.01);
   EXPECT_GT(sagitta, 0.5 * 0.05);
+}
+
+// A plane's triangle (0,0), (1,0), (0.5,0.5) whose first edge is a B-spline that passes
+// through its vertex (1,0) inside its range, runs on in a loop 0.3 long and comes back to
+// (1.0005, 0.0005), where its range ends: the vertex's tolerance covers the 7e-4, as a STEP
+// reader that projects the vertex onto the curve leaves it when it stops on the loop's return
+// (KiCad's Bourns 8100 toroids).
+TopoDS_Face TriangleWithOvershootingEdge() {
+  const gp_Pnt through[] = {{0, 0, 0},   {0.5, 0, 0},   {1, 0, 0},          {1.2, -0.1, 0},
+                            {1.3, 0, 0}, {1.2, 0.1, 0}, {1.0005, 0.0005, 0}};
+  const int n = sizeof(through) / sizeof(through[0]);
+  Handle(TColgp_HArray1OfPnt) points = new TColgp_HArray1OfPnt(1, n);
+  Handle(TColStd_HArray1OfReal) params = new TColStd_HArray1OfReal(1, n);
+  for (int i = 0; i < n; ++i) points->SetValue(i + 1, through[i]), params->SetValue(i + 1, i);
+  GeomAPI_Interpolate interpolate(points, params, false, 1e-9);
+  interpolate.Perform();
+  Handle(Geom_BSplineCurve) curve = interpolate.Curve();
+  BRep_Builder b;
+  TopoDS_Vertex start, end, apex;
+  b.MakeVertex(start, through[0], 1e-7);
+  b.MakeVertex(end, through[2], 1e-3);
+  b.MakeVertex(apex, gp_Pnt(0.5, 0.5, 0), 1e-7);
+  TopoDS_Edge overshooting;
+  b.MakeEdge(overshooting, curve, 1e-7);
+  b.Add(overshooting, start.Oriented(TopAbs_FORWARD));
+  b.Add(overshooting, end.Oriented(TopAbs_REVERSED));
+  b.Range(overshooting, 0, n - 1);
+  b.UpdateVertex(start, 0, overshooting, 1e-7);
+  b.UpdateVertex(end, n - 1, overshooting, 1e-3);
+  BRepBuilderAPI_MakeWire wire(overshooting, BRepBuilderAPI_MakeEdge(end, apex).Edge(),
+                               BRepBuilderAPI_MakeEdge(apex, start).Edge());
+  return BRepBuilderAPI_MakeFace(gp_Pln(gp::XOY()), wire.Wire()).Face();
+}
+
+// The overshooting edge's grid ends at its vertex, where its curve passes through it (parameter
+// 2), and leaves the loop out: the face's triangles along it would fold over the loop's chords.
+TEST(GridsTest, AGridEndsWhereItsCurvePassesThroughItsVertex) {
+  auto model = LoadShape(TriangleWithOvershootingEdge(), "overshooting");
+  ASSERT_TRUE(model);
+  ASSERT_EQ(model->edge_count(), 3);
+  GridCriteria criteria;
+  criteria.max_deviation = 1e-3;
+  std::vector<EdgeGrid> grids;
+  ASSERT_TRUE(
+      BuildEdgeGrids(*model, testing::Pcurves(*model), criteria, 1, {}, nullptr, &grids).ok());
+  int overshooting = 0;
+  for (const EdgeGrid& g : grids) {
+    if (g.t.back() - g.t.front() < 1) continue;  // the lines (parameters up to 0.71)
+    ++overshooting;
+    EXPECT_NEAR(g.t.back(), 2, 1e-6);  // 6 without the trim
+    EXPECT_LT(Dist(g.xyz.back(), Vec3{1, 0, 0}), 1e-9);
+    for (const Vec3& x : g.xyz) EXPECT_LE(x.x, 1 + 1e-9);
+  }
+  EXPECT_EQ(overshooting, 1);
 }
 
 }  // namespace
