@@ -137,11 +137,10 @@ TRIAGE = {
         "past Q as in SSO-4."),
     "L_CommonMode_Toroid_Vertical_L19.3mm": (
         "face 220 (cylinder) is bounded by two edges with the same two ends that lie on each "
-        "other within edge 439's tolerance 0.0039: the face has no width, and both chords are "
-        "dropped as a pinch, leaving no loop. Face 151: edge 439's B-spline pcurve drops from "
-        "u = 2pi to 0 inside the 0.0014 mm edge, so the loop swept the whole cylinder (estimate "
-        "0.564, 17x); since face_domain's UnwrapSeamJumps face 151 is 2 triangles and the file's "
-        "hausdorff 0.97x the request (face 220 still fails)."),
+        "other within edge 439's tolerance 0.0039: the face has no width. rdmesh meshes it ok "
+        "with no triangles (NoWidth: its width, twice its area over its perimeter, is within "
+        "the deviation, and its neighbours mesh both edges); the yardstick counts it uncovered. "
+        "Face 151's pcurve that ran back over the period is fixed (UnwrapSeamJumps)."),
     "TerminalBlock_Phoenix_PT-1,5-": (
         "the worst sample lies in an elliptic hole of a planar face (face 71 of the 1x02: 0.0271 "
         "by the yardstick, 0.0188 by BRepExtrema_DistShapeShape, 0.92x; face 105 of the 1x04: "
@@ -153,19 +152,19 @@ TRIAGE = {
         "89b2e06 the two iso-lines through the axis are constraints inside the face (METHOD.md, "
         "singular lines): 0 inverted, 832 -> 708 triangles."),
     "Fuseholder_Schurter_0031.7701": (
-        "face 132's edges lie up to 0.1 off its surface (tolerance 1e-7): 6 inverted triangles, "
-        "hausdorff 0.051 (6x); rdmesh reports the B-rep. Since 220b18e: 4 inverted (b53f6d1's "
-        "build: 6)."),
+        "its B-rep: face 132's edges lie up to 0.1 off its surface (tolerance 1e-7) and the far "
+        "vertex (tolerance 0.173) a quarter turn around the fillet from its pcurves' ends; rdmesh "
+        "reports the B-rep on 4 faces. Since 7b017bd (a face left folded is meshed again from "
+        "the surface's nearest points to its vertices) 0 inverted (4 before), hausdorff 6.0x as "
+        "before."),
     "L_CommonMode_Toroid_Vertical_L39.4mm": (
-        "faces 118 and 334, of 2e-5 mm2 each, hold 3 inverted triangles each (folding, "
-        "face/refiner). Face 118 is a plane sliver about 1e-4 wide: the chord of its 0.10 mm "
-        "B-spline edge crosses the segments of its 0.0004 mm edge in the plane, though not in "
-        "the face's (u,v), where HealEdgeGrids looks for crossings. Checking the plane's "
-        "crossings too split the edge, but then two neighbouring planes failed with their own "
-        "loops crossing in (u,v) (not kept). Flips after refinement change nothing here."),
+        "faces 118 and 334, planar slivers 4e-4 wide, held 3 inverted triangles each: a 0.1 mm "
+        "B-spline edge's curve passes through its end vertex a quarter along its range, runs on "
+        "and comes back near it where the range ends (the reader's projection of the vertex "
+        "stopped on the return). Since 7b017bd the edge's grid ends where the curve passes "
+        "through (ThroughVertexRange): 0 inverted."),
     "L_CommonMode_Toroid_Vertical_L41.9mm": (
-        "as the L39.4: tiny faces the refinement could not refine without folding. Since "
-        "220b18e: 6 inverted (b53f6d1's build: 7); since RepairFolds 4."),
+        "as the L39.4 (faces 118 and 271): 4 inverted before 7b017bd, 0 since."),
     "TO-8-2": "face 12 (revolution): 1 inverted triangle (folding, face/refiner).",
     "ESP-WROOM-02": (
         "faces 209, 211 and 219 (1e-3 mm2 each): 1 inverted triangle each (folding, "
@@ -189,16 +188,17 @@ CAUSES = {
         "whose normal flips inside, where the refinement split without end."),
     "failed face": (
         "toroid L19.3: a cylinder face of no width, two edges with the same ends lying on each "
-        "other within a 0.0039 tolerance (face_domain drops them as a pinch)."),
+        "other within a 0.0039 tolerance; rdmesh meshes it ok with no triangles (it lies within "
+        "the deviation of its edges, which its neighbours mesh), the yardstick counts it "
+        "uncovered."),
     "inverted": (
-        "faces the refinement could not refine to the criteria without folding (surfaces of "
-        "revolution, faces of 1e-5 to 1e-3 mm2), and one face whose edges lie 0.1 off its "
-        "surface (Fuseholder_Schurter)."),
+        "before 89b2e06 and 7b017bd: faces whose surface collapses along a line inside them "
+        "(SSO's bow-ties, HC33's crystal can), and faces beside a vertex their pcurves miss "
+        "(the Bourns toroids' slivers, the Fuseholder's fillet)."),
     "deviation": (
-        "4 of the 6 are the yardstick's over-estimate beside elliptic holes and arcs "
+        "4 of the 5 are the yardstick's over-estimate beside elliptic holes and arcs "
         "(BRepExtrema_DistShapeShape puts the same samples within 0.72x to 0.99x of the "
-        "request); the toroid L19.3's is a pcurve that runs back over the period (fixed by "
-        "face_domain's UnwrapSeamJumps, after this run); the Fuseholder's is its B-rep."),
+        "request); the Fuseholder's is its B-rep, which rdmesh reports."),
     "non-manifold: the B-rep's own": (
         "B-rep edges of four faces, coincident distinct edges, and cylinders of one solid "
         "tangent along a line (checked on 6 files with an OCCT topology dump)."),
