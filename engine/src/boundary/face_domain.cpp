@@ -58,12 +58,14 @@ void ComputeScale(Surface& s, FaceDomain* d) {
 // (u,v), kept only when it lands on the point (within a tenth of the miss).
 constexpr double kPcurveMiss = 0.01;
 
-Vec2 ProjectNear(Surface& s, Vec2 start, Vec3 target, double miss) {
+// Gauss-Newton steps from `start` toward the surface's point nearest `target` (finite
+// differences), from a distance `gap`, while a step brings it closer and it is above `stop`;
+// the distance reached into *reached.
+Vec2 DescendToward(Surface& s, Vec2 start, Vec3 target, double gap, double stop, double* reached) {
   const double hu = 1e-7 * std::max(s.umax - s.umin, 1e-12);
   const double hv = 1e-7 * std::max(s.vmax - s.vmin, 1e-12);
   Vec2 q = start;
-  double gap = miss;
-  for (int iter = 0; iter < 8 && gap > 1e-3 * miss; ++iter) {
+  for (int iter = 0; iter < 8 && gap > stop; ++iter) {
     Vec3 p = s.Point(q.x, q.y);
     Vec3 su = (1.0 / hu) * (s.Point(q.x + hu, q.y) - p);
     Vec3 sv = (1.0 / hv) * (s.Point(q.x, q.y + hv) - p);
@@ -78,6 +80,13 @@ Vec2 ProjectNear(Surface& s, Vec2 start, Vec3 target, double miss) {
     if (!(next_gap < gap)) break;
     q = next, gap = next_gap;
   }
+  *reached = gap;
+  return q;
+}
+
+Vec2 ProjectNear(Surface& s, Vec2 start, Vec3 target, double miss) {
+  double gap;
+  const Vec2 q = DescendToward(s, start, target, miss, 1e-3 * miss, &gap);
   return gap <= 0.1 * miss ? q : start;
 }
 
@@ -408,28 +417,11 @@ void SetBounds(Surface& surface, FaceDomain* d) {
   ComputeScale(surface, d);
 }
 
-// The (u,v) of the surface's point nearest `target` (Gauss-Newton from `start`, as ProjectNear,
-// but kept wherever it ends: the target may lie off the surface).
+// The (u,v) of the surface's point nearest `target` (DescendToward, as ProjectNear, but kept
+// wherever it ends: the target may lie off the surface).
 Vec2 NearestOnSurface(Surface& s, Vec2 start, Vec3 target) {
-  const double hu = 1e-7 * std::max(s.umax - s.umin, 1e-12);
-  const double hv = 1e-7 * std::max(s.vmax - s.vmin, 1e-12);
-  Vec2 q = start;
-  double gap = Dist(s.Point(q.x, q.y), target);
-  for (int iter = 0; iter < 8 && gap > 0; ++iter) {
-    Vec3 p = s.Point(q.x, q.y);
-    Vec3 su = (1.0 / hu) * (s.Point(q.x + hu, q.y) - p);
-    Vec3 sv = (1.0 / hv) * (s.Point(q.x, q.y + hv) - p);
-    Vec3 r = target - p;
-    double a = Dot(su, su), b = Dot(su, sv), c = Dot(sv, sv);
-    double det = a * c - b * b;
-    if (!(det > 1e-24 * a * c)) break;
-    double ru = Dot(su, r), rv = Dot(sv, r);
-    Vec2 next{q.x + (c * ru - b * rv) / det, q.y + (a * rv - b * ru) / det};
-    double next_gap = Dist(s.Point(next.x, next.y), target);
-    if (!(next_gap < gap)) break;
-    q = next, gap = next_gap;
-  }
-  return q;
+  double gap;
+  return DescendToward(s, start, target, Dist(s.Point(start.x, start.y), target), 0, &gap);
 }
 
 }  // namespace
