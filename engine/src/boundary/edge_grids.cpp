@@ -72,12 +72,12 @@ double PolylineLength(Curve& curve, double f, double l, int samples) {
 }
 
 // The parameter in [a, b] where the curve comes nearest to x, where it has one minimum there
-// (golden section), and that distance.
-double NearestParameter(Curve& curve, Vec3 x, double a, double b, double* distance) {
+// (`steps` of golden section), and that distance.
+double NearestParameter(Curve& curve, Vec3 x, double a, double b, int steps, double* distance) {
   constexpr double kInvPhi = 0.6180339887498949;
   double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
   double fc = Dist(curve.Point(c), x), fd = Dist(curve.Point(d), x);
-  for (int k = 0; k < kThroughSteps; ++k) {
+  for (int k = 0; k < steps; ++k) {
     if (fc < fd) {
       b = d, d = c, fd = fc;
       c = b - kInvPhi * (b - a), fc = Dist(curve.Point(c), x);
@@ -116,7 +116,8 @@ void ThroughVertexRange(const TopoDS_Edge& edge, Curve& curve, double* f, double
     for (int k = 1; k < kThroughSamples; ++k) {
       if (!(d[k] <= d[k - 1] && d[k] <= d[k + 1])) continue;
       double distance;
-      const double t = NearestParameter(curve, vertex, param(k - 1), param(k + 1), &distance);
+      const double t =
+          NearestParameter(curve, vertex, param(k - 1), param(k + 1), kThroughSteps, &distance);
       if (distance < best) best = distance, through = t, best_k = k;
     }
     if (best_k < 0 || !(best <= tolerance)) continue;
@@ -239,20 +240,10 @@ std::vector<EdgeSide> NarrowSides(const Model& model, const FacePcurves& pcurves
 
 // The distance from x to the curve over [a, b], where it has one minimum (golden section).
 double CurveDistance(Curve& curve, Vec3 x, double a, double b) {
-  constexpr double kInvPhi = 0.6180339887498949;
-  double best = std::min(Dist(curve.Point(a), x), Dist(curve.Point(b), x));
-  double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
-  double fc = Dist(curve.Point(c), x), fd = Dist(curve.Point(d), x);
-  for (int k = 0; k < kCurveDistanceSteps; ++k) {
-    if (fc < fd) {
-      b = d, d = c, fd = fc;
-      c = b - kInvPhi * (b - a), fc = Dist(curve.Point(c), x);
-    } else {
-      a = c, c = d, fc = fd;
-      d = a + kInvPhi * (b - a), fd = Dist(curve.Point(d), x);
-    }
-  }
-  return std::min({best, fc, fd});
+  const double ends = std::min(Dist(curve.Point(a), x), Dist(curve.Point(b), x));
+  double inside;
+  NearestParameter(curve, x, a, b, kCurveDistanceSteps, &inside);
+  return std::min(ends, inside);
 }
 
 // How far the edge's 3D curve lies from one face's boundary, at `samples` + 1 even parameter steps:
