@@ -118,10 +118,16 @@ TRIAGE = {
         "yardstick and 1.19e-3 by BRepExtrema_DistShapeShape (to the ellipse): 0.99x the "
         "request. The yardstick over-estimates here."),
     "NXP_MPL115A1_LGA-8": (
-        "edge tolerances up to 0.4 on a 6 mm part; the four fillet corners (faces 5, 6, 9, 10, "
-        "surfaces of revolution, pcurves 0.4 off their arcs) get 20% of their area (0.054 of "
-        "0.267 each): the loop that RepairLoosePcurves projects onto the surface encloses a "
-        "part of the face; BRepExtrema agrees the worst sample is 0.0069 off face 9."),
+        "the file has no pcurves (uncertainty 1e-7): the reader projects the edge circles of the "
+        "four fillet corners (faces 5, 6, 9, 10, surfaces of revolution) onto wrong turns and "
+        "raises their tolerances to 0.4 to cover them. Their pcurve loops span a turn and a "
+        "quarter (u in [-pi/2, 2pi]): OCCT's area 0.267 each. The edges' 3D curves lie on the "
+        "surface and bound a quarter turn, 0.0538 by Pappus (0.0538 with the pcurves projected "
+        "again onto one turn: BRepCheck valid, tolerances 1.4e-7), which rdmesh meshes whole "
+        "(0.0537, within 5.7e-4 of the surface, watertight). The worst sample (0.0069 off each "
+        "corner by the yardstick and by BRepExtrema_DistShapeShape) lies 3.5e-4 from the "
+        "surface, at a foot (u = 4.747) the face's classifier puts inside its pcurves; "
+        "BRepExtrema takes the foot a turn back (u = -1.536), outside them."),
     "SSO-4_6.7x5.1mm": (
         "8 faces (20, 21, 33, 35, 42, 46, 68, 71) are planar bilinear B-spline patches "
         "twisted into a bow-tie: the iso-line where dS/du vanishes is one point Q, and the "
@@ -176,8 +182,9 @@ TRIAGE = {
 CAUSES_1E4 = {
     "deviation": (
         "Crystal_C38-LF: the yardstick's over-estimate beside an elliptic hole (0.99x by "
-        "BRepExtrema_DistShapeShape); NXP_MPL115A1: its B-rep (tolerances up to 0.4 mm), whose "
-        "four fillet corners are meshed over a fifth of their area."),
+        "BRepExtrema_DistShapeShape); NXP_MPL115A1: the reader's pcurves of its four fillet "
+        "corners span a turn and a quarter where their edges bound a quarter turn, which is "
+        "meshed whole; the worst sample's foot is taken a turn away, outside those pcurves."),
     "non-manifold: the B-rep's own": (
         "B-rep edges of four faces, coincident distinct edges, and cylinders of one solid "
         "tangent along a line (checked on 6 files with an OCCT topology dump)."),

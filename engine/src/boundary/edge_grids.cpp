@@ -325,7 +325,7 @@ double CurveSurfaceGap(const Model& model, Curve& curve, double first, double la
 
 // The tolerance an edge's grid heeds: its own, unless that is coarser than the deviation while
 // its 3D curve lies on its faces' surfaces much closer (then that distance). A tolerance is what
-// the edge's representations may disagree by; a STEP writer's repair can inflate it for pcurves
+// the edge's representations may disagree by; a STEP reader's repair can inflate it for pcurves
 // that miss (NXP_MPL115A1, issue 35: 0.4 on fillet arcs 0.24 long whose curves lie on both
 // faces), and the curve is still the edge: it is neither collapsed nor left coarse.
 double GridTolerance(const Model& model, const TopoDS_Edge& edge, Curve& curve, double first,

@@ -123,10 +123,10 @@ Vec2 ProjectFromAfar(Surface& s, Vec3 target, double scale, bool* found) {
 }
 
 // Where a walk's pcurve misses the edge's grid points by more than kLoosePcurve of the edge's
-// length (a STEP writer's repair left NXP_MPL115A1's fillet corners with pcurves 0.4 off on arcs
-// 0.24 long, issue 35; the edges' 3D curves lie on the surface), the walk takes the (u,v) of its
-// points on the surface instead, each moved by whole periods next to the one before. Left as it
-// is when a point does not lie on the surface.
+// length (NXP_MPL115A1's file has no pcurves, and the reader projects its fillet arcs, 0.24 long,
+// onto wrong turns, up to 0.4 off, issue 35; the edges' 3D curves lie on the surface), the walk
+// takes the (u,v) of its points on the surface instead, each moved by whole periods next to the
+// one before. Left as it is when a point does not lie on the surface.
 void RepairLoosePcurves(const Model& model, const std::vector<EdgeGrid>& grids, double period_u,
                         double period_v, Surface& surface, std::vector<EdgeWalk>* walks) {
   for (EdgeWalk& w : *walks) {

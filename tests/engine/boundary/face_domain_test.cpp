@@ -603,7 +603,7 @@ TEST(FaceDomainTest, ALoopOverTwoTurnsIsMeshedOnceWithoutItsDegenerateEdges) {
   ExpectEveryEdgeUsedTwice(result->mesh.triangles);
 }
 
-// A pin (a cylinder of radius 0.05, 1 long) written as NXP_MPL115A1's fillets were (issue 35): its
+// A pin (a cylinder of radius 0.05, 1 long) as NXP_MPL115A1's fillets are read (issue 35): its
 // top circle's tolerance and its vertex's inflated to 0.4, more than the circle's length (0.31),
 // and the circle's pcurve on the side moved 0.3 down the axis, while its 3D curve lies on both
 // faces. (It used to collapse the circle, fail the top and refine the side to 188,778 triangles.)
