@@ -91,6 +91,10 @@ void ComputeFaceAreas(Model* model) {
         model->face_area[id - 1] = *area;
         return;
       }
+      if (const std::optional<double> area = NaturalPatchArea(model->face(id))) {
+        model->face_area[id - 1] = *area;
+        return;
+      }
       GProp_GProps props;
       BRepGProp::SurfaceProperties(model->face(id), props);
       model->face_area[id - 1] = std::abs(props.Mass());
