@@ -5,11 +5,13 @@
 #include <BRep_Tool.hxx>
 #include <BSplCLib_CacheParams.hxx>
 #include <BSplSLib.hxx>
+#include <GeomAdaptor_Curve.hxx>
 #include <GeomAdaptor_Surface.hxx>
 #include <GeomConvert.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
+#include <Geom_SurfaceOfRevolution.hxx>
 #include <Precision.hxx>
 #include <TColStd_Array2OfReal.hxx>
 #include <algorithm>
@@ -23,6 +25,7 @@
 #include <gp_Pnt.hxx>
 #include <gp_Sphere.hxx>
 #include <gp_Torus.hxx>
+#include <gp_Trsf.hxx>
 #include <gp_Vec.hxx>
 #include <memory>
 #include <unordered_map>
@@ -169,6 +172,28 @@ class OcctSurface final : public Surface {
         v_trig_.resize(size_t{1} << kTrigBits);
         break;
       }
+      case GeomAbs_SurfaceOfRevolution: {
+        Handle(Geom_SurfaceOfRevolution) revolution =
+            Handle(Geom_SurfaceOfRevolution)::DownCast(adaptor_.Surface());
+        if (revolution.IsNull()) break;
+        // As GeomAdaptor_Surface builds its evaluator: the axis from the location and direction.
+        const gp_Ax1 axis(revolution->Location(), revolution->Direction());
+        origin_ = axis.Location().XYZ();
+        // gp_Mat::SetRotation's parts that do not depend on the angle: the cross-product matrix
+        // of the normalised direction, and its square as it writes it.
+        const gp_XYZ d = axis.Direction().XYZ().Normalized();
+        const double a = d.X(), b = d.Y(), c = d.Z();
+        const double cross[3][3] = {{0.0, -c, b}, {c, 0.0, -a}, {-b, a, 0.0}};
+        const double square[3][3] = {{-c * c - b * b, a * b, a * c},
+                                     {a * b, -a * a - c * c, b * c},
+                                     {a * c, b * c, -a * a - b * b}};
+        std::memcpy(cross_, cross, sizeof(cross_));
+        std::memcpy(square_, square, sizeof(square_));
+        profile_.Load(revolution->BasisCurve());
+        profile_points_.resize(size_t{1} << kTrigBits);
+        kind_ = Kind::kRevolution;
+        break;
+      }
       default:
         break;
     }
@@ -196,6 +221,8 @@ class OcctSurface final : public Surface {
         return SpherePoint(u, v);
       case Kind::kTorus:
         return TorusPoint(u, v);
+      case Kind::kRevolution:
+        return RevolutionPoint(u, v);
       case Kind::kOther:
         break;
     }
@@ -271,6 +298,42 @@ class OcctSurface final : public Surface {
     return InFrame(a1, a2, a3);
   }
 
+  // GeomEvaluator_SurfaceOfRevolution::D0: the profile's point at v (through OCCT's adaptor: it
+  // depends on v alone, its cache rebuilt as BSplCLib locates the span) turned about the axis by
+  // u, with gp_Trsf::SetRotation's and gp_Pnt::Transform's arithmetic in the same order, so the
+  // same bits (SurfaceTest.RevolutionMatchesOcctBitForBit). The profile's points of recent v
+  // are remembered, as cos and sin of recent u: the turn was two thirds of a point's cost.
+  Vec3 RevolutionPoint(double u, double v) {
+    uint64_t kv;
+    std::memcpy(&kv, &v, sizeof(v));
+    ProfilePoint& c = profile_points_[(kv * 0x9E3779B97F4A7C15ull) >> (64 - kTrigBits)];
+    if (!c.filled || c.key != kv) {
+      c.key = kv, c.filled = true;
+      profile_.D0(v, c.point);
+    }
+    const CosSin& cu = Trig(u, u_trig_);
+    // gp_Mat::SetRotation: (cross matrix x sin + I) + (M M) x (1 - cos), element by element.
+    double m[3][3];
+    const double one_less = 1.0 - cu.cos;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        m[i][j] = (cross_[i][j] * cu.sin + (i == j ? 1.0 : 0.0)) + square_[i][j] * one_less;
+    // gp_Trsf::SetRotation's translation: (-O) M + O; gp_XYZ::Multiply sums left to right.
+    auto times = [&m](double x, double y, double z, double out[3]) {
+      for (int i = 0; i < 3; ++i) out[i] = m[i][0] * x + m[i][1] * y + m[i][2] * z;
+    };
+    double loc[3], p[3];
+    times(-origin_.X(), -origin_.Y(), -origin_.Z(), loc);
+    loc[0] += origin_.X(), loc[1] += origin_.Y(), loc[2] += origin_.Z();
+    times(c.point.X(), c.point.Y(), c.point.Z(), p);
+    return {p[0] + loc[0], p[1] + loc[1], p[2] + loc[2]};
+  }
+  struct ProfilePoint {
+    uint64_t key = 0;
+    bool filled = false;
+    gp_Pnt point;
+  };
+
   // std::cos(t), std::sin(t), remembered by the bits of t in a direct-mapped table.
   struct CosSin {
     uint64_t key = 0;
@@ -329,7 +392,7 @@ class OcctSurface final : public Surface {
   }
 
   GeomAdaptor_Surface adaptor_;
-  enum class Kind { kOther, kPlane, kCylinder, kCone, kSphere, kTorus };
+  enum class Kind { kOther, kPlane, kCylinder, kCone, kSphere, kTorus, kRevolution };
   Kind kind_ = Kind::kOther;             // which closed form Point() uses, if any
   std::array<gp_XYZ, 4> frame_;          // x, y and z directions and origin of an elementary one
   double radius_ = 0;                    // a cone's reference radius, a torus's major one
@@ -337,8 +400,12 @@ class OcctSurface final : public Surface {
   double torus_zero_ = 0;                // coordinates this near 0 are 0 (ElSLib::TorusD0)
   double cone_sin_ = 0, cone_cos_ = 0;   // of a cone's semi-angle
   std::vector<CosSin> u_trig_, v_trig_;  // cos and sin of recent angle parameters
-  Handle(Geom_BSplineSurface) bspline_;  // null unless B-spline
-  std::vector<Span> spans_;              // empty unless B-spline
+  gp_XYZ origin_;                        // a surface of revolution's axis location
+  double cross_[3][3] = {}, square_[3][3] = {};   // its rotation's parts (RevolutionPoint)
+  GeomAdaptor_Curve profile_;                     // its basis curve
+  std::vector<ProfilePoint> profile_points_;      // its profile's points at recent v
+  Handle(Geom_BSplineSurface) bspline_;           // null unless B-spline
+  std::vector<Span> spans_;                       // empty unless B-spline
   std::unique_ptr<SpanPolynomials> polynomials_;  // B-spline points
   Span* last_ = nullptr;                          // the span slot SpanOf() returned last
   uint64_t clock_ = 0;

@@ -4,14 +4,17 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeRevol.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
 #include <BRep_Tool.hxx>
+#include <GeomAPI_Interpolate.hxx>
 #include <GeomAPI_PointsToBSplineSurface.hxx>
 #include <GeomAdaptor_Surface.hxx>
 #include <GeomConvert.hxx>
@@ -20,6 +23,7 @@
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array2OfPnt.hxx>
+#include <TColgp_HArray1OfPnt.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <algorithm>
@@ -231,6 +235,19 @@ TEST(SurfaceTest, PlaneCylinderAndConeMatchOcctBitForBit) {
   ExpectFacesMatchOcct(BRepPrimAPI_MakeBox(axis, 3.5, 1.25, 7).Shape(), GeomAbs_Plane);
   ExpectFacesMatchOcct(BRepPrimAPI_MakeCylinder(axis, 2.75, 9.5).Shape(), GeomAbs_Cylinder);
   ExpectFacesMatchOcct(BRepPrimAPI_MakeCone(axis, 3.25, 1.5, 6).Shape(), GeomAbs_Cone);
+}
+
+TEST(SurfaceTest, RevolutionMatchesOcctBitForBit) {
+  // A B-spline profile beside the axis, turned three quarters of the way round (the sweep makes
+  // a Geom_SurfaceOfRevolution of it).
+  Handle(TColgp_HArray1OfPnt) points = new TColgp_HArray1OfPnt(1, 6);
+  const double xs[] = {1.0, 1.6, 1.3, 2.2, 1.9, 1.2}, zs[] = {0, 0.7, 1.5, 2.1, 3.0, 3.4};
+  for (int i = 1; i <= 6; ++i) points->SetValue(i, gp_Pnt(xs[i - 1], 0, zs[i - 1]));
+  GeomAPI_Interpolate profile(points, false, 1e-9);
+  profile.Perform();
+  const TopoDS_Edge edge = BRepBuilderAPI_MakeEdge(profile.Curve()).Edge();
+  const TopoDS_Shape turned = BRepPrimAPI_MakeRevol(edge, gp::OZ(), 1.5 * M_PI).Shape();
+  ExpectFacesMatchOcct(turned, GeomAbs_SurfaceOfRevolution);
 }
 
 }  // namespace
