@@ -2,8 +2,11 @@
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
+#include <Extrema_GenLocateExtPS.hxx>
+#include <Extrema_POnSurf.hxx>
 #include <Geom2d_Curve.hxx>
 #include <GeomAPI_ProjectPointOnSurf.hxx>
+#include <GeomAdaptor_Surface.hxx>
 #include <Geom_Surface.hxx>
 #include <Precision.hxx>
 #include <Standard_Failure.hxx>
@@ -297,27 +300,53 @@ double EdgeFaceGap(const Model& model, const FacePcurves& pcurves, int edge_id,
 
 // How far the edge's 3D curve lies from the surfaces of its faces (not from their pcurves): the
 // largest distance to the nearest surface point, at kGapSamples + 1 even steps; infinity where a
-// projection finds nothing.
-double CurveSurfaceGap(const Model& model, Curve& curve, double first, double last,
-                       const std::vector<int>& faces) {
+// projection finds nothing. Only whether it is below `enough` decides, and its value below: so
+// each sample first takes the surface point a local search finds from its pcurve's point (an
+// upper bound of the nearest within the surface's bounds), and the global projection only where
+// that is not below `enough`; the first sample at or above it ends the search.
+double CurveSurfaceGap(const Model& model, const FacePcurves& pcurves, int edge_id,
+                       const TopoDS_Edge& edge, Curve& curve, double first, double last,
+                       const std::vector<int>& faces, double enough) {
   double gap = 0;
   for (int f : faces) {
+    const TopoDS_Face& face = model.face(f);
     TopLoc_Location location;
-    const Handle(Geom_Surface)& surface = BRep_Tool::Surface(model.face(f), location);
+    const Handle(Geom_Surface)& surface = BRep_Tool::Surface(face, location);
     if (surface.IsNull()) return INFINITY;
     const gp_Trsf to_surface = location.Transformation().Inverted();
-    // One projector per face, as GeomAPI_ProjectPointOnSurf(point, surface) sets it up: its
-    // grid of surface points is built once, not for every point (a B-spline's, over its whole
-    // range, was most of axom_boxed_sphere's edge stage).
     double u0, u1, v0, v1;
     surface->Bounds(u0, u1, v0, v1);
+    const GeomAdaptor_Surface adaptor(surface);
+    Extrema_GenLocateExtPS local(adaptor);
+    const Pcurve found = pcurves.Find(f, face, edge_id, edge);
+    // One global projector per face, as GeomAPI_ProjectPointOnSurf(point, surface) sets it up,
+    // built on first need: its grid of surface points is built once, not for every point (a
+    // B-spline's, over its whole range, was most of axom_boxed_sphere's edge stage).
     GeomAPI_ProjectPointOnSurf projection;
-    projection.Init(surface, u0, u1, v0, v1, Precision::Confusion());
+    bool projector = false;
     for (int k = 0; k <= kGapSamples; ++k) {
       const Vec3 x = curve.Point(first + (last - first) * k / kGapSamples);
-      projection.Perform(gp_Pnt(x.x, x.y, x.z).Transformed(to_surface));
-      if (!projection.IsDone() || projection.NbPoints() == 0) return INFINITY;
-      gap = std::max(gap, projection.LowerDistance());
+      const gp_Pnt p = gp_Pnt(x.x, x.y, x.z).Transformed(to_surface);
+      double d = INFINITY;
+      if (!found.curve.IsNull()) {
+        const gp_Pnt2d start =
+            found.curve->Value(found.first + (found.last - found.first) * k / kGapSamples);
+        local.Perform(p, start.X(), start.Y(), Standard_True);
+        if (local.IsDone()) {
+          double u, v;
+          local.Point().Parameter(u, v);
+          if (u >= u0 && u <= u1 && v >= v0 && v <= v1) d = p.Distance(adaptor.Value(u, v));
+        }
+      }
+      if (!(d < enough)) {
+        if (!projector) projection.Init(surface, u0, u1, v0, v1, Precision::Confusion());
+        projector = true;
+        projection.Perform(p);
+        if (!projection.IsDone() || projection.NbPoints() == 0) return INFINITY;
+        d = projection.LowerDistance();
+      }
+      gap = std::max(gap, d);
+      if (!(gap < enough)) return gap;
     }
   }
   return gap;
@@ -328,12 +357,15 @@ double CurveSurfaceGap(const Model& model, Curve& curve, double first, double la
 // the edge's representations may disagree by; a STEP reader's repair can inflate it for pcurves
 // that miss (NXP_MPL115A1, issue 35: 0.4 on fillet arcs 0.24 long whose curves lie on both
 // faces), and the curve is still the edge: it is neither collapsed nor left coarse.
-double GridTolerance(const Model& model, const TopoDS_Edge& edge, Curve& curve, double first,
-                     double last, const std::vector<int>& faces, double max_deviation) {
+double GridTolerance(const Model& model, const FacePcurves& pcurves, int edge_id,
+                     const TopoDS_Edge& edge, Curve& curve, double first, double last,
+                     const std::vector<int>& faces, double max_deviation) {
   const double tolerance = BRep_Tool::Tolerance(edge);
   if (!(max_deviation > 0) || tolerance <= max_deviation) return tolerance;
-  const double gap = CurveSurfaceGap(model, curve, first, last, faces);
-  return gap < kCurveOnSurface * max_deviation ? std::max(gap, Precision::Confusion()) : tolerance;
+  const double enough = kCurveOnSurface * max_deviation;
+  const double gap =
+      CurveSurfaceGap(model, pcurves, edge_id, edge, curve, first, last, faces, enough);
+  return gap < enough ? std::max(gap, Precision::Confusion()) : tolerance;
 }
 
 }  // namespace
@@ -399,7 +431,7 @@ Status BuildEdgeGrids(const Model& model, const FacePcurves& pcurves, const Grid
           c.rd_tolerance = gc.rd_tolerance;
           c.max_length = gc.max_length;
           const double tolerance =
-              GridTolerance(model, edge, *curve, f, l, faces, gc.max_deviation);
+              GridTolerance(model, pcurves, e, edge, *curve, f, l, faces, gc.max_deviation);
           c.min_length = std::max(gc.min_length, tolerance);
           // The gap and the tolerance above look at the whole range, the grid at its part up to
           // where the curve passes through its vertices.
