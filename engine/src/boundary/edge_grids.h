@@ -20,6 +20,7 @@ struct EdgeGrid {
   int first_vertex = 0;  ///< vertex id at t.front()
   int last_vertex = 0;   ///< vertex id at t.back()
   bool degenerate = false;
+  double moved = 0;  ///< how far MoveEdgeGrids moved its nodes off the curve (off-surface runs)
 };
 
 struct GridCriteria {

@@ -563,26 +563,29 @@ int MoveVertexNodesToSurface(Surface& surface, FaceDomain* d) {
   return count;
 }
 
-double BoundaryGap(const FaceDomain& domain, Surface& surface) {
+double BoundaryGap(const FaceDomain& domain, Surface& surface, const std::vector<double>& moved) {
   double gap = 0;
   for (size_t i = 0; i < domain.uv.size(); ++i) {
     const Vec2 q = domain.uv[i];
     // Along the normal: a pcurve that is not parametrised as its 3D curve puts S(uv) beside the
     // point, along the surface.
     const Vec3 off = domain.xyz[i] - surface.Point(q.x, q.y);
-    gap = std::max(gap, std::fabs(Dot(off, surface.Normal(q.x, q.y))));
+    const double away = std::fabs(Dot(off, surface.Normal(q.x, q.y)));
+    gap = std::max(gap, moved.empty() ? away : away - moved[i]);
   }
   return gap;
 }
 
-double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain) {
+double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain,
+                              const std::vector<double>& moved) {
   const BRepAdaptor_Surface surface(face, false);
   double gap = 0;
   for (size_t i = 0; i < domain.uv.size(); ++i) {
     const Vec2 q = domain.uv[i], in = IntoSurfaceRange(surface, q);
     if (in.x == q.x && in.y == q.y) continue;
     const gp_Pnt s = surface.Value(in.x, in.y);
-    gap = std::max(gap, Dist(domain.xyz[i], Vec3{s.X(), s.Y(), s.Z()}));
+    const double away = Dist(domain.xyz[i], Vec3{s.X(), s.Y(), s.Z()});
+    gap = std::max(gap, moved.empty() ? away : away - moved[i]);
   }
   return gap;
 }

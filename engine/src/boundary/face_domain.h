@@ -67,14 +67,19 @@ int MoveVertexNodesToSurface(Surface& surface, FaceDomain* domain);
 /// How far the domain's nodes (points of the edges' 3D curves, shared with the neighbouring
 /// faces) lie off the surface at their (u,v): the largest |(xyz - S(uv)) . N(uv)|. The B-rep lets
 /// it reach the edge and vertex tolerances; the mesh's triangles along such an edge lean from its
-/// points to the surface, so the face cannot be meshed much closer than this.
-double BoundaryGap(const FaceDomain& domain, Surface& surface);
+/// points to the surface, so the face cannot be meshed much closer than this. `moved`, empty or
+/// one per node: how far the run moved the node off its curve (off-surface runs), taken off its
+/// distance, so that what remains is the B-rep's.
+double BoundaryGap(const FaceDomain& domain, Surface& surface,
+                   const std::vector<double>& moved = {});
 
 /// How far the domain's nodes lie off the face where their (u,v) runs past the surface's own
 /// range (IntoSurfaceRange): the largest |xyz - S(uv moved into the range)|, 0 where none does.
 /// There OCCT extends the surface, so BoundaryGap sees the extension, while the face ends at the
-/// range. `domain` in the face's own (u,v) (not its B-spline conversion's).
-double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain);
+/// range. `domain` in the face's own (u,v) (not its B-spline conversion's); `moved` as
+/// BoundaryGap's.
+double BoundaryGapPastSurface(const TopoDS_Face& face, const FaceDomain& domain,
+                              const std::vector<double>& moved = {});
 
 /// How far the face's trim (its pcurves on the surface) lies from its edges' 3D curves, which
 /// the mesh's boundary follows (they are shared with the neighbours): the largest distance from

@@ -279,6 +279,7 @@ void MoveEdgeGrids(const Model& model, const std::vector<MovedEdge>& edges, doub
     const MovedEdge& m = edges[e - 1];
     if (m.kind == MovedEdge::kNone || g.xyz.empty()) continue;
     const BRepAdaptor_Curve curve(model.edge(e));
+    g.moved = distance;
     for (size_t k = 0; k < g.xyz.size(); ++k)
       g.xyz[k] = g.xyz[k] + distance * MoveDirection(m, curve, g.t[k], g.xyz[k], scale);
     for (int end = 0; end < 2; ++end) {

@@ -14,6 +14,9 @@
 #include <BRepPrimAPI_MakePrism.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
+#include <BRep_Builder.hxx>
+#include <Geom_Circle.hxx>
+#include <Geom_SphericalSurface.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <algorithm>
@@ -202,6 +205,51 @@ TEST(OffSurfaceTest, TorusMovesWhereItBendsOneWay) {
   EXPECT_LT(b, 0.93 * a) << b << " vs " << a;
   std::printf("torus at 1e-3: %lld triangles on the surface, %lld off it\n",
               static_cast<long long>(a), static_cast<long long>(b));
+}
+
+// A face whose edge lies off it beyond the request stays on its surface and says why: its
+// triangles along the edge already lean that far from the face, and an offset only adds to it
+// (brepnet_132907's tori at 1e-4, whose edges lie 0.0088 past their trims on the tori's
+// extensions). A patch of the unit sphere between two meridians and two latitudes (at its
+// corners a meridian and a latitude would move their nodes different ways, so no edge moves with
+// the face), whose top latitude's 3D curve lies 5 deviations past its trim on the sphere (its
+// pcurve and vertices at the trim, their tolerance covering the gap): its mesh reaches that
+// curve on the sphere and measures within the request from it, so without the rule it moved off.
+TEST(OffSurfaceTest, AFaceWhoseEdgesLieOffItBeyondTheRequestStaysOnItsSurface) {
+  constexpr double kDeviation = 0.002, kGap = 5 * kDeviation, kTop = M_PI / 4;
+  Handle(Geom_SphericalSurface) sphere = new Geom_SphericalSurface(gp_Ax3(), 1.0);
+  const TopoDS_Face patch = BRepBuilderAPI_MakeFace(sphere, 0, M_PI / 2, 0.1, kTop, 1e-7).Face();
+  int lifted = 0;
+  for (TopExp_Explorer ex(patch, TopAbs_EDGE); ex.More(); ex.Next()) {
+    const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+    BRepAdaptor_Curve curve(edge);
+    if (curve.GetType() != GeomAbs_Circle || curve.Circle().Location().Z() < 0.5) continue;
+    const double past = kTop + kGap;  // the latitude kGap past the top one, along the sphere
+    BRep_Builder().UpdateEdge(
+        edge, new Geom_Circle(gp_Ax2(gp_Pnt(0, 0, std::sin(past)), gp::DZ()), std::cos(past)),
+        2 * kGap);
+    for (TopExp_Explorer v(edge, TopAbs_VERTEX); v.More(); v.Next())
+      BRep_Builder().UpdateVertex(TopoDS::Vertex(v.Current()), 2 * kGap);
+    ++lifted;
+  }
+  ASSERT_EQ(lifted, 1);
+  auto model = LoadShape(patch, "sphere patch with a lifted top edge");
+  ASSERT_TRUE(model);
+  MeshOptions options;
+  options.off_surface = true;
+  options.max_deviation = kDeviation;
+  const MeshResult r = MeshOrDie(*model, options);
+  ASSERT_EQ(r.faces.size(), 1u);
+  const FaceMesh& f = r.faces[0];
+  ASSERT_EQ(f.status, FaceStatus::kOk) << f.reason;
+  EXPECT_EQ(f.offset, 0);
+  EXPECT_NE(f.offset_reason.find("kept on the surface: the B-rep prevents"), std::string::npos)
+      << f.offset_reason;
+  EXPECT_NE(f.reason.find("the B-rep prevents"), std::string::npos) << f.reason;
+  // Every node on the sphere.
+  ASSERT_GT(f.node_count(), 20);
+  for (size_t i = 0; i < f.xyz.size(); i += 3)
+    EXPECT_NEAR(std::hypot(f.xyz[i], f.xyz[i + 1], f.xyz[i + 2]), 1.0, 1e-9);
 }
 
 TEST(OffSurfaceTest, SameMeshAtAnyThreadCount) {
