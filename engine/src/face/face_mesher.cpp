@@ -165,17 +165,30 @@ FaceMesh Stopped(FaceMesh f, const Context& context) {
 
 }  // namespace
 
-std::string BrepReason(double deviation, double gap, double tolerance, double missed) {
-  char text[360];
+std::string BrepReason(double deviation, const BrepGaps& gaps, double missed) {
+  char text[400];
   int n = std::snprintf(text, sizeof(text),
                         "the B-rep prevents the requested deviation %.3g: its edge tolerance is up "
-                        "to %.3g and its edges lie up to %.3g off its surface",
-                        deviation, tolerance, gap);
-  if (missed > deviation + std::max(gap, tolerance) && n > 0 && n < int(sizeof(text)))
-    std::snprintf(text + n, sizeof(text) - n,
-                  "; beyond that, some triangles could not be refined to the criteria without "
-                  "folding (up to %.3g)",
-                  missed);
+                        "to %.3g",
+                        deviation, gaps.tolerance);
+  auto add = [&](const char* format, double value) {
+    if (n > 0 && n < int(sizeof(text)))
+      n += std::snprintf(text + n, sizeof(text) - n, format, value);
+  };
+  // Where the pcurves miss the edges' curves by more than the edges miss the surface, that is
+  // what the face sees (a reader's projection on the wrong turn): the edges themselves may lie on
+  // it.
+  const bool trim = gaps.trim > deviation && gaps.trim > gaps.edges;
+  if (gaps.edges > deviation || !trim)
+    add(" and its edges lie up to %.3g off its surface", trim ? gaps.edges : gaps.Largest());
+  if (trim)
+    add(gaps.edges > deviation ? ", its pcurves up to %.3g from its edges' curves"
+                               : " and its pcurves lie up to %.3g from its edges' curves",
+        gaps.trim);
+  if (missed > deviation + std::max(gaps.Largest(), gaps.tolerance))
+    add("; beyond that, some triangles could not be refined to the criteria without folding (up "
+        "to %.3g)",
+        missed);
   return text;
 }
 
@@ -355,9 +368,8 @@ class FaceRun {
     // A face whose edges lie off it beyond the request stays on its surface: its triangles
     // along them already lean that far, and an offset only adds to it (brepnet_132907's tori at
     // 1e-4: 3.48x the request off the surface, 3.08x on it).
-    double tolerance = 0;
-    const double gap = BrepGap(*surface_, deviation, &tolerance);
-    if (gap > deviation) return KeepOn(BrepReason(deviation, gap, tolerance, 0));
+    const BrepGaps gaps = MeasureBrepGaps(*surface_, deviation);
+    if (gaps.Largest() > deviation) return KeepOn(BrepReason(deviation, gaps, 0));
     // Its offset would tear where the normal reverses.
     if (!domain_.line_segments.empty()) return KeepOn("its surface collapses along a line");
     const int side = job_.bend_sides ? (*job_.bend_sides)[face_id_ - 1] : 0;
@@ -619,16 +631,16 @@ class FaceRun {
   void ExplainShortfall() {
     const double deviation = job_.criteria.max_deviation;
     Surface& surface = base_ ? *base_ : *surface_;
-    double tolerance = 0;
-    const double gap = BrepGap(surface, deviation, &tolerance);
+    const BrepGaps gaps = MeasureBrepGaps(surface, deviation);
+    const double gap = gaps.Largest();
     const bool missed = stats_.max_violation > 1.0 + 1e-9;
     const bool coarse =
-        tolerance > deviation && (missed || BoundaryChordHeight(domain_, surface) > deviation);
+        gaps.tolerance > deviation && (missed || BoundaryChordHeight(domain_, surface) > deviation);
     if (gap > deviation) f_.max_deviation = std::max(f_.max_deviation, gap);
     if (stats_.budget_hit)
       f_.reason = "stopped at the per-face triangle cap";
     else if (deviation > 0 && (gap > deviation || coarse))
-      f_.reason = BrepReason(deviation, gap, tolerance, missed ? stats_.max_deviation : 0);
+      f_.reason = BrepReason(deviation, gaps, missed ? stats_.max_deviation : 0);
     else if (missed && stats_.stuck_folds > 0)
       f_.reason = StuckFoldReason(stats_.stuck_folds, stats_.over);
     else if (missed)
@@ -641,9 +653,9 @@ class FaceRun {
   // range (BoundaryGapPastSurface), and, where the edges' tolerance (into *tolerance) is coarser
   // than the deviation, the trim from the edges' 3D curves (EdgeTrimGap). 0 without a deviation.
   // Not the run's own moves off the surface: edges and vertices moved with their faces.
-  double BrepGap(Surface& surface, double deviation, double* tolerance) const {
-    *tolerance = 0;
-    if (!(deviation > 0)) return 0;
+  BrepGaps MeasureBrepGaps(Surface& surface, double deviation) const {
+    BrepGaps gaps;
+    if (!(deviation > 0)) return gaps;
     std::vector<double> moved(domain_.uv.size(), 0.0);
     for (size_t i = 0; i < moved.size(); ++i) {
       const NodeRef& r = domain_.ref[i];
@@ -653,13 +665,14 @@ class FaceRun {
         moved[i] = Dist(domain_.xyz[i], Vec3{p.X(), p.Y(), p.Z()});
       }
     }
-    double gap = BoundaryGap(domain_, surface, moved);
-    if (!job_.nurbs) gap = std::max(gap, BoundaryGapPastSurface(face_, domain_, moved));
-    *tolerance = EdgeTolerance(face_);
+    gaps.edges = BoundaryGap(domain_, surface, moved);
+    if (!job_.nurbs)
+      gaps.edges = std::max(gaps.edges, BoundaryGapPastSurface(face_, domain_, moved));
+    gaps.tolerance = EdgeTolerance(face_);
     // Seen from the surface, the mesh's boundary (the edges' 3D curves) misses the face's trim
     // (the pcurves) by as much as they lie apart, which the edge tolerance allows.
-    if (*tolerance > deviation) gap = std::max(gap, EdgeTrimGap(face_, deviation));
-    return gap;
+    if (gaps.tolerance > deviation) gaps.trim = EdgeTrimGap(face_, deviation);
+    return gaps;
   }
   bool Stopping() const { return context_ && context_->ShouldStop(); }
   bool Stop() {

@@ -2,6 +2,7 @@
 // One face, start to end: evaluator, (u,v) domain, constrained triangulation, refinement, and
 // the FaceMesh it hands to assembly. Faces are independent once the edge grids exist.
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -57,13 +58,21 @@ struct FaceJob {
   FaceSurfaces* surfaces = nullptr;
 };
 
-/// A face's reason when the B-rep keeps it from the requested `deviation`: its edges lie up to
-/// `gap` off its surface, and their tolerance is up to `tolerance`. What the B-rep explains: a
-/// triangle measured from corners up to `gap` off the surface, or beside chords as coarse as the
-/// edges' tolerance, can read up to the request plus the larger of the two. Where refinement left
-/// the face further over (`missed`, its largest deviation; 0 when it met the criteria), the
-/// reason says so as well.
-std::string BrepReason(double deviation, double gap, double tolerance, double missed);
+/// How far a face's B-rep keeps its boundary from its surface: its edges off the surface
+/// (`edges`), its pcurves' images off its edges' 3D curves (`trim`, measured where the edges'
+/// tolerance is coarser than the request), and its edges' largest tolerance.
+struct BrepGaps {
+  double edges = 0, trim = 0, tolerance = 0;
+  double Largest() const { return std::max(edges, trim); }
+};
+
+/// A face's reason when the B-rep keeps it from the requested `deviation`: how far its edges lie
+/// off its surface, or its pcurves from its edges' curves where that is more, and its edges'
+/// tolerance. What the B-rep explains: a triangle measured from corners that far off, or beside
+/// chords as coarse as the edges' tolerance, can read up to the request plus the larger of the
+/// two. Where refinement left the face further over (`missed`, its largest deviation; 0 when it
+/// met the criteria), the reason says so as well.
+std::string BrepReason(double deviation, const BrepGaps& gaps, double missed);
 
 /// A face's reason when refinement left `over` triangles over the criteria, `folds` of them
 /// folded after kFoldRun splits in a row each handed the fold on (RefineStats::stuck_folds).

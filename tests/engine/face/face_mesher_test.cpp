@@ -29,25 +29,45 @@ namespace {
 
 const char kBeyond[] = "beyond that, some triangles could not be refined";
 
+// Gaps of edges off the surface and of pcurves off the edges, and the edges' tolerance.
+BrepGaps Gaps(double edges, double trim, double tolerance) {
+  BrepGaps g;
+  g.edges = edges, g.trim = trim, g.tolerance = tolerance;
+  return g;
+}
+
 TEST(FaceMesherTest, BrepReasonNamesTheBrepsOffsets) {
-  const std::string reason = BrepReason(0.00381, 0.00761, 0.00589, 0.00761);
+  const std::string reason = BrepReason(0.00381, Gaps(0.00761, 0, 0.00589), 0.00761);
   EXPECT_EQ(reason,
             "the B-rep prevents the requested deviation 0.00381: its edge tolerance is up to "
             "0.00589 and its edges lie up to 0.00761 off its surface");
 }
 
+TEST(FaceMesherTest, BrepReasonNamesPcurvesThatMissTheirEdges) {
+  // NXP_MPL115A1 at 1e-4 (issue 35): edges on the surface, pcurves projected a turn away.
+  EXPECT_EQ(BrepReason(0.000597, Gaps(2e-7, 0.366, 0.4), 0),
+            "the B-rep prevents the requested deviation 0.000597: its edge tolerance is up to "
+            "0.4 and its pcurves lie up to 0.366 from its edges' curves");
+  // Both beyond the request: both named.
+  EXPECT_EQ(BrepReason(0.001, Gaps(0.002, 0.005, 0.006), 0),
+            "the B-rep prevents the requested deviation 0.001: its edge tolerance is up to "
+            "0.006 and its edges lie up to 0.002 off its surface, its pcurves up to 0.005 from its "
+            "edges' curves");
+}
+
 TEST(FaceMesherTest, BrepReasonSaysWhenTheMissIsMoreThanTheBrepExplains) {
   // Request 0.00381, edges 0.00581 off: up to 0.00962 is the B-rep's.
-  EXPECT_EQ(BrepReason(0.00381, 0.00581, 0.00414, 0.0096).find(kBeyond), std::string::npos);
-  EXPECT_EQ(BrepReason(0.00381, 0.00581, 0.00414, 0).find(kBeyond), std::string::npos);
-  const std::string over = BrepReason(0.00381, 0.00581, 0.00414, 0.121);
+  EXPECT_EQ(BrepReason(0.00381, Gaps(0.00581, 0, 0.00414), 0.0096).find(kBeyond),
+            std::string::npos);
+  EXPECT_EQ(BrepReason(0.00381, Gaps(0.00581, 0, 0.00414), 0).find(kBeyond), std::string::npos);
+  const std::string over = BrepReason(0.00381, Gaps(0.00581, 0, 0.00414), 0.121);
   EXPECT_NE(over.find("its edges lie up to 0.00581 off its surface; " + std::string(kBeyond)),
             std::string::npos)
       << over;
   EXPECT_NE(over.find("without folding (up to 0.121)"), std::string::npos) << over;
   // A coarse tolerance explains as much as a gap does.
-  EXPECT_EQ(BrepReason(0.00067, 0.0003, 0.00886, 0.009).find(kBeyond), std::string::npos);
-  EXPECT_NE(BrepReason(0.00067, 0.0003, 0.00886, 0.01).find(kBeyond), std::string::npos);
+  EXPECT_EQ(BrepReason(0.00067, Gaps(0.0003, 0, 0.00886), 0.009).find(kBeyond), std::string::npos);
+  EXPECT_NE(BrepReason(0.00067, Gaps(0.0003, 0, 0.00886), 0.01).find(kBeyond), std::string::npos);
 }
 
 // Triangles whose normal points against the surface normals at their corners.
