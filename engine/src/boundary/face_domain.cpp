@@ -98,9 +98,9 @@ struct EdgeWalk {
 };
 
 // A pcurve that misses its edge by more than this fraction of the edge's length is no guide to
-// where the edge lies on the surface (RepairLoosePcurves).
+// where the edge lies on the surface (RepairLoosePcurve).
 constexpr double kLoosePcurve = 0.5;
-// RepairLoosePcurves looks for a point's nearest surface point from the best of this many
+// RepairLoosePcurve looks for a point's nearest surface point from the best of this many
 // (u,v) samples along each parameter.
 constexpr int kRepairSamples = 24;
 
@@ -122,39 +122,36 @@ Vec2 ProjectFromAfar(Surface& s, Vec3 target, double scale, bool* found) {
   return q;
 }
 
-// Where a walk's pcurve misses the edge's grid points by more than kLoosePcurve of the edge's
-// length (NXP_MPL115A1's file has no pcurves, and the reader projects its fillet arcs, 0.24 long,
-// onto wrong turns, up to 0.4 off, issue 35; the edges' 3D curves lie on the surface), the walk
-// takes the (u,v) of its points on the surface instead, each moved by whole periods next to the
-// one before. Left as it is when a point does not lie on the surface.
-void RepairLoosePcurves(const Model& model, const std::vector<EdgeGrid>& grids, double period_u,
-                        double period_v, Surface& surface, std::vector<EdgeWalk>* walks) {
-  for (EdgeWalk& w : *walks) {
-    const EdgeGrid& g = grids[w.eid - 1];
-    if (g.degenerate) continue;
-    const int n = static_cast<int>(w.uv.size());
-    std::vector<Vec3> xyz(n);
-    double length = 0, miss = 0;
-    for (int k = 0; k < n; ++k) {
-      const int idx = w.reversed ? n - 1 - k : k;
-      xyz[k] = idx == 0       ? VertexPoint(model, g.first_vertex)
-               : idx == n - 1 ? VertexPoint(model, g.last_vertex)
-                              : g.xyz[idx];
-      if (k > 0) length += Dist(xyz[k], xyz[k - 1]);
-      miss = std::max(miss, Dist(surface.Point(w.uv[k].x, w.uv[k].y), xyz[k]));
-    }
-    if (!(miss > kLoosePcurve * length)) continue;
-    std::vector<Vec2> uv(n);
-    bool found = true;
-    for (int k = 0; k < n && found; ++k) {
-      uv[k] = ProjectFromAfar(surface, xyz[k], std::max(length, miss), &found);
-      if (k == 0) continue;
-      for (auto [period, axis] : {std::pair(period_u, &Vec2::x), std::pair(period_v, &Vec2::y)})
-        if (period > 0)
-          uv[k].*axis += period * std::round((uv[k - 1].*axis - uv[k].*axis) / period);
-    }
-    if (found) w.uv = std::move(uv);
+// Where a walk's pcurve misses the edge's grid points by more than `loose` of the edge's length
+// (kLoosePcurve: NXP_MPL115A1's file has no pcurves, and the reader projects its fillet arcs, 0.24
+// long, onto wrong turns, up to 0.4 off, issue 35; the edges' 3D curves lie on the surface), the
+// walk takes the (u,v) of its points on the surface instead, each moved by whole periods next to
+// the one before. Left as it is when a point does not lie on the surface.
+void RepairLoosePcurve(const Model& model, const std::vector<EdgeGrid>& grids, double period_u,
+                       double period_v, double loose, Surface& surface, EdgeWalk* w) {
+  const EdgeGrid& g = grids[w->eid - 1];
+  if (g.degenerate) return;
+  const int n = static_cast<int>(w->uv.size());
+  std::vector<Vec3> xyz(n);
+  double length = 0, miss = 0;
+  for (int k = 0; k < n; ++k) {
+    const int idx = w->reversed ? n - 1 - k : k;
+    xyz[k] = idx == 0       ? VertexPoint(model, g.first_vertex)
+             : idx == n - 1 ? VertexPoint(model, g.last_vertex)
+                            : g.xyz[idx];
+    if (k > 0) length += Dist(xyz[k], xyz[k - 1]);
+    miss = std::max(miss, Dist(surface.Point(w->uv[k].x, w->uv[k].y), xyz[k]));
   }
+  if (!(miss > loose * length)) return;
+  std::vector<Vec2> uv(n);
+  bool found = true;
+  for (int k = 0; k < n && found; ++k) {
+    uv[k] = ProjectFromAfar(surface, xyz[k], std::max(length, miss), &found);
+    if (k == 0) continue;
+    for (auto [period, axis] : {std::pair(period_u, &Vec2::x), std::pair(period_v, &Vec2::y)})
+      if (period > 0) uv[k].*axis += period * std::round((uv[k - 1].*axis - uv[k].*axis) / period);
+  }
+  if (found) w->uv = std::move(uv);
 }
 
 // A pcurve may cross its surface's seam inside an edge by running back over the whole period (a
@@ -317,6 +314,50 @@ bool WithoutOverlap(const Model& model, const std::vector<EdgeGrid>& grids,
   return true;
 }
 
+// Per walk of a joined loop, whether it meets a neighbour only within the B-rep's tolerance: its
+// end and the next walk's start (the last's end and the first's start, after whole periods: a loop
+// around a cylinder closes a turn on) more than `slack` apart in (u,v).
+std::vector<bool> AtLooseJunctions(const std::vector<EdgeWalk>& walks, double period_u,
+                                   double period_v, double slack) {
+  const int m = static_cast<int>(walks.size());
+  std::vector<bool> loose(m, false);
+  for (int i = 0; i < m; ++i) {
+    const int j = (i + 1) % m;
+    Vec2 gap = walks[j].uv.front() - walks[i].uv.back();
+    if (j == 0)
+      for (auto [period, axis] : {std::pair(period_u, &Vec2::x), std::pair(period_v, &Vec2::y)})
+        if (period > 0) gap.*axis -= period * std::round(gap.*axis / period);
+    if (std::hypot(gap.x, gap.y) > slack) loose[i] = loose[j] = true;
+  }
+  return loose;
+}
+
+// On a periodic surface, where two walks of a loop meet only within the B-rep's tolerance, the
+// walks at that junction whose pcurves miss their edges by more than kPcurveMiss of the length take
+// their points on the surface (RepairLoosePcurve), and the loop is joined again from `unjoined`
+// (the walks before any join); kept, into *walks and *unjoined, when all its walks then meet.
+// JoinWalks moves a walk by whole periods only onto the end before it, so a pcurve that ends on a
+// wrong turn puts the walks after it on that turn (issue 35: NXP_MPL115A1's fillet corners, whose
+// reader-made pcurves end up to half a turn off, within the 0.4 tolerance but under kLoosePcurve
+// of the edge's length).
+void MeetOnTheSurface(const Model& model, const std::vector<EdgeGrid>& grids, double period_u,
+                      double period_v, double slack, Surface& surface,
+                      std::vector<EdgeWalk>* unjoined, std::vector<EdgeWalk>* walks) {
+  if (period_u <= 0 && period_v <= 0) return;
+  const std::vector<bool> loose = AtLooseJunctions(*walks, period_u, period_v, slack);
+  if (std::find(loose.begin(), loose.end(), true) == loose.end()) return;
+  std::vector<EdgeWalk> placed = *unjoined;
+  for (size_t i = 0; i < placed.size(); ++i)
+    if (loose[i])
+      RepairLoosePcurve(model, grids, period_u, period_v, kPcurveMiss, surface, &placed[i]);
+  const std::vector<EdgeWalk> before = placed;
+  if (!JoinLoop(model, grids, period_u, period_v, slack, surface, &placed).ok()) return;
+  const std::vector<bool> still = AtLooseJunctions(placed, period_u, period_v, slack);
+  if (std::find(still.begin(), still.end(), true) != still.end()) return;
+  *unjoined = before;
+  *walks = std::move(placed);
+}
+
 // The node a vertex takes where loops touch at it (or one loop passes it twice): among the
 // vertex's nodes so far (`nodes`), the one at the same (u,v), or else the nearest within `slack`
 // (pcurves that meet at the vertex only up to rounding: 3e-16 apart where a LED's hole touches
@@ -438,7 +479,8 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
     Status st = WalkWire(wire, grids, &walks);
     if (!st.ok()) return st;
     if (walks.empty()) continue;
-    RepairLoosePcurves(model, grids, period_u, period_v, surface, &walks);
+    for (EdgeWalk& w : walks)
+      RepairLoosePcurve(model, grids, period_u, period_v, kLoosePcurve, surface, &w);
     UnwrapSeamJumps(model, grids, period_u, period_v, surface, &walks);
     // The slack for pcurve ends that meet: 1e-3 of the loop's extent in (u,v), as before any
     // tolerance is looked at.
@@ -448,9 +490,10 @@ Status BuildFaceDomain(const Model& model, const FacePcurves& pcurves, int face_
         span =
             std::max({span, std::fabs(p.x - walks[0].uv[0].x), std::fabs(p.y - walks[0].uv[0].y)});
     const double slack = 1e-3 * std::max(span, 1e-12) + 1e-9;
-    const std::vector<EdgeWalk> unjoined = walks;
+    std::vector<EdgeWalk> unjoined = walks;
     st = JoinLoop(model, grids, period_u, period_v, slack, surface, &walks);
     if (!st.ok()) return st;
+    MeetOnTheSurface(model, grids, period_u, period_v, slack, surface, &unjoined, &walks);
     if (CoversMoreThanAPeriod(walks, period_u, period_v))
       WithoutOverlap(model, grids, unjoined, period_u, period_v, slack, span, surface, &walks);
     const int m = static_cast<int>(walks.size());

@@ -14,6 +14,7 @@
 #include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepGProp.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeRevol.hxx>
 #include <BRepTools.hxx>
@@ -22,6 +23,7 @@
 #include <BRep_Tool.hxx>
 #include <GC_MakeArcOfCircle.hxx>
 #include <GC_MakeSegment.hxx>
+#include <GProp_GProps.hxx>
 #include <Geom2dAPI_Interpolate.hxx>
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_Line.hxx>
@@ -32,6 +34,7 @@
 #include <Geom_CylindricalSurface.hxx>
 #include <Geom_Line.hxx>
 #include <Geom_SphericalSurface.hxx>
+#include <Geom_SurfaceOfRevolution.hxx>
 #include <Geom_TrimmedCurve.hxx>
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
@@ -42,11 +45,13 @@
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Iterator.hxx>
 #include <TopoDS_Vertex.hxx>
 #include <TopoDS_Wire.hxx>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <gp_Ax1.hxx>
 #include <gp_Ax2.hxx>
 #include <gp_Ax3.hxx>
 #include <gp_Circ.hxx>
@@ -671,6 +676,139 @@ TEST(FaceDomainTest, AnEdgeOnItsFacesIsMeshedByItsCurveWhateverItsTolerance) {
   }
   EXPECT_LE(result->summary.triangles, 100);
   ExpectEveryEdgeUsedTwice(result->mesh.triangles);
+}
+
+// A fillet corner as a STEP file without pcurves reads (NXP_MPL115A1's four corners, issue 35):
+// a quarter turn, u in [3pi/2, 2pi], of a surface of revolution whose profile is a quarter circle
+// of radius 0.15 centred 0.05 from the axis, v in [0, pi/2]. The reader projects the edges' circles
+// onto the surface on the wrong turns: the two circles' pcurves run over three quarters of a turn
+// each (the bottom from u = pi/2 to 2pi, the top from -pi/2 to pi), and the two profiles' swing
+// across half a turn near one end; the edges' tolerances grow to 0.4 to cover that. The loop then
+// spans u in [-pi/2, 2pi], a turn and a quarter, and the face's area by its pcurves is five times
+// the quarter's. The edges' 3D curves lie on the surface and bound the quarter. The wire lists the
+// left profile, the bottom circle, the right profile and the top circle, from the `start`th of
+// them on (NXP's wires start at the top circle).
+TopoDS_Face FilletCornerReadOverATurnAndAQuarter(int start) {
+  Handle(Geom_Circle) profile =
+      new Geom_Circle(gp_Ax2(gp_Pnt(0.05, 0, 0), gp_Dir(0, -1, 0), gp_Dir(1, 0, 0)), 0.15);
+  Handle(Geom_SurfaceOfRevolution) surface = new Geom_SurfaceOfRevolution(
+      new Geom_TrimmedCurve(profile, 0, M_PI / 2), gp_Ax1(gp::Origin(), gp::DZ()));
+  const TopoDS_Face face =
+      BRepBuilderAPI_MakeFace(surface, 1.5 * M_PI, 2 * M_PI, 0, M_PI / 2, 1e-7).Face();
+  BRep_Builder builder;
+  std::vector<TopoDS_Shape> edges;
+  for (TopoDS_Iterator it(BRepTools::OuterWire(face)); it.More(); it.Next())
+    edges.push_back(it.Value());
+  for (const TopoDS_Shape& edge : edges) {
+    const TopoDS_Edge& e = TopoDS::Edge(edge);
+    double first, last;
+    const Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, first, last);
+    const gp_Pnt2d a = pcurve->Value(first), b = pcurve->Value(last);
+    // The reader's pcurve through (u,v) points at parameters first, middle, last.
+    auto polyline = [&](gp_Pnt2d p, double middle, gp_Pnt2d q, gp_Pnt2d r) {
+      TColgp_Array1OfPnt2d poles(1, 3);
+      poles(1) = p, poles(2) = q, poles(3) = r;
+      TColStd_Array1OfReal knots(1, 3);
+      knots(1) = first, knots(2) = middle, knots(3) = last;
+      TColStd_Array1OfInteger mults(1, 3);
+      mults(1) = 2, mults(2) = 1, mults(3) = 2;
+      builder.UpdateEdge(e, new Geom2d_BSplineCurve(poles, knots, mults, 1), face, 0.4);
+    };
+    const double mid = 0.5 * (first + last);
+    if (std::fabs(a.Y() - b.Y()) < 1e-9) {  // a circle: its u over three quarters of a turn
+      const double shift = a.Y() < 1e-9 ? -4 * M_PI : -5 * M_PI;
+      auto on_turn = [&](gp_Pnt2d p) { return gp_Pnt2d(3 * p.X() + shift, p.Y()); };
+      polyline(on_turn(a), mid, on_turn(pcurve->Value(mid)), on_turn(b));
+    } else {  // a profile: on its iso-line but near one end, where it swings across half a turn
+      const bool left = std::fabs(a.X() - 1.5 * M_PI) < 1e-9;
+      const double swing = left ? first + 0.1 * (last - first) : last - 0.1 * (last - first);
+      auto at = [&](double t) {
+        const gp_Pnt2d p = pcurve->Value(t);
+        return gp_Pnt2d(left ? p.X() - 2 * M_PI : p.X(), p.Y());
+      };
+      const bool from_bottom = a.Y() < b.Y();
+      gp_Pnt2d p = at(first), r = at(last);
+      // The end at the bottom (left) or the top (right) lands half a turn on.
+      if (left == from_bottom)
+        p.SetX(p.X() + M_PI);
+      else
+        r.SetX(r.X() + (left ? M_PI : -M_PI));
+      polyline(p, swing, at(swing), r);
+    }
+    TopoDS_Vertex v0, v1;
+    TopExp::Vertices(e, v0, v1);
+    builder.UpdateVertex(v0, 0.4), builder.UpdateVertex(v1, 0.4);
+  }
+  TopoDS_Wire wire;
+  builder.MakeWire(wire);
+  for (size_t k = 0; k < edges.size(); ++k) builder.Add(wire, edges[(start + k) % edges.size()]);
+  TopoDS_Face from_start = TopoDS::Face(face.EmptyCopied());
+  builder.Add(from_start, wire);
+  return from_start;
+}
+
+// The (u,v) of a loop's walks are placed edge by edge, each next to the one before; where the
+// reader's pcurve ends lie half a turn off, where the loop starts decides which turn each edge
+// lands on. The face is meshed over its quarter whichever edge its wire starts at.
+TEST(FaceDomainTest, AFilletCornerReadOverATurnIsMeshedOverItsQuarterWhereverItsWireStarts) {
+  // Pappus: the profile's length times the quarter turn of its centroid, 0.05 + 0.3 / pi out.
+  const double quarter = (0.15 * M_PI / 2) * (M_PI / 2) * (0.05 + 0.3 / M_PI);
+  for (int start = 0; start < 4; ++start) {
+    SCOPED_TRACE("the wire starts at its edge " + std::to_string(start));
+    const TopoDS_Face face = FilletCornerReadOverATurnAndAQuarter(start);
+    double u0, u1, v0, v1;
+    BRepTools::UVBounds(face, u0, u1, v0, v1);
+    EXPECT_NEAR(u1 - u0, 2.5 * M_PI, 1e-6) << "the pcurves run over a turn and a quarter";
+    GProp_GProps props;
+    BRepGProp::SurfaceProperties(face, props);
+    EXPECT_GT(props.Mass(), 3 * quarter) << "OCCT's area follows the pcurves";
+    std::vector<FaceMesh> faces;
+    ASSERT_NO_FATAL_FAILURE(MeshFaces(face, "fillet_over_a_turn", 1e-4, &faces));
+    ASSERT_EQ(faces.size(), 1u);
+    const FaceMesh& f = faces[0];
+    EXPECT_EQ(f.status, FaceStatus::kOk) << f.reason;
+    EXPECT_NEAR(f.area, quarter, 0.01 * quarter);
+    // Every node on the quarter turn and on the surface, within the deviation.
+    auto node = [&](int i) { return Vec3{f.xyz[3 * i], f.xyz[3 * i + 1], f.xyz[3 * i + 2]}; };
+    for (int i = 0; i < f.node_count(); ++i) {
+      const Vec3 p = node(i);
+      EXPECT_TRUE(p.x >= -1e-9 && p.y <= 1e-9) << "node " << i << " at " << p.x << " " << p.y;
+      EXPECT_NEAR(std::hypot(std::hypot(p.x, p.y) - 0.05, p.z), 0.15, 1e-4) << "node " << i;
+    }
+    // The face's normal (FORWARD: the surface's) points away from the profile's centre, on the
+    // circle of radius 0.05: no triangle turns its back on it.
+    gp_Pnt at;
+    gp_Vec du, dv;
+    BRep_Tool::Surface(face)->D1(1.75 * M_PI, M_PI / 4, at, du, dv);
+    auto away = [](Vec3 p) {
+      const double r = std::hypot(p.x, p.y);
+      return p - Vec3{0.05 * p.x / r, 0.05 * p.y / r, 0};
+    };
+    const gp_Vec normal = du.Crossed(dv);
+    const double side = Dot(away({at.X(), at.Y(), at.Z()}), {normal.X(), normal.Y(), normal.Z()});
+    int inverted = 0;
+    for (int64_t t = 0; t < f.triangle_count(); ++t) {
+      const int32_t* c = &f.triangles[3 * t];
+      const Vec3 a = node(c[0]), b = node(c[1]), e = node(c[2]);
+      inverted += side * Dot(Cross(b - a, e - a), away((1.0 / 3) * (a + b + e))) <= 0;
+    }
+    EXPECT_EQ(inverted, 0);
+    // Every edge of the triangles is used twice, but those along the quarter's four sides once.
+    std::map<std::pair<int, int>, int> uses;
+    for (size_t k = 0; k < f.triangles.size(); k += 3)
+      for (int i = 0; i < 3; ++i) {
+        const int a = f.triangles[k + i], b = f.triangles[k + (i + 1) % 3];
+        ++uses[{std::min(a, b), std::max(a, b)}];
+      }
+    auto sides = [&](int i) {  // a bit for each side the node lies on
+      const Vec3 p = node(i);
+      return (std::fabs(p.x) < 1e-9) | (std::fabs(p.y) < 1e-9) << 1 | (std::fabs(p.z) < 1e-9) << 2 |
+             (std::fabs(p.z - 0.15) < 1e-9) << 3;
+    };
+    for (const auto& [edge, n] : uses)
+      EXPECT_TRUE(n == 2 || (n == 1 && (sides(edge.first) & sides(edge.second))))
+          << "nodes " << edge.first << " and " << edge.second << " in " << n << " triangles";
+  }
 }
 
 // A patch of a unit cylinder across its seam, u in [2pi - 0.2, 2pi + 0.2] and v in [0, 1],
