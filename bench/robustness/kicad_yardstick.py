@@ -182,9 +182,10 @@ TRIAGE = {
 CAUSES_1E4 = {
     "deviation": (
         "Crystal_C38-LF: the yardstick's over-estimate beside an elliptic hole (0.99x by "
-        "BRepExtrema_DistShapeShape); NXP_MPL115A1: the reader's pcurves of its four fillet "
-        "corners span a turn and a quarter where their edges bound a quarter turn, which is "
-        "meshed whole; the worst sample's foot is taken a turn away, outside those pcurves."),
+        "BRepExtrema_DistShapeShape); NXP_MPL115A1 before 7c8e9e2: the reader's pcurves of its "
+        "four fillet corners span a turn and a quarter where their edges bound a quarter turn, "
+        "which is meshed whole; the worst sample's foot is taken a turn away, outside those "
+        "pcurves (clean since, 0.98x: no mesh point falls there)."),
     "non-manifold: the B-rep's own": (
         "B-rep edges of four faces, coincident distinct edges, and cylinders of one solid "
         "tangent along a line (checked on 6 files with an OCCT topology dump)."),
