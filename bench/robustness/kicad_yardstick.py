@@ -115,8 +115,12 @@ TRIAGE = {
         "surface within 4e-8): 0.72x the request. The yardstick over-estimates here."),
     "Crystal_C38-LF_D3.0mm_L8.0mm_Horizontal_1EP_style2": (
         "the worst sample lies in planar face 6's elliptic hole, 2.22e-3 from the face by the "
-        "yardstick and 1.19e-3 by BRepExtrema_DistShapeShape (to the ellipse): 0.99x the "
-        "request. The yardstick over-estimates here."),
+        "yardstick and 1.19e-3 by BRepExtrema_DistShapeShape and by Extrema_ExtPC over the "
+        "whole ellipse (the face's edge 2, range [3pi/2, 7pi/2], foot t = 5pi/2): 0.99x the "
+        "request. The yardstick refines its boundary polyline by Extrema_ExtPC over each short "
+        "range, and over [7.804, 7.904] about that foot OCCT 7.6 finds no extremum, so its "
+        "polyline's nearest vertex stands (bench/robustness/boundary_probe.cpp). The yardstick "
+        "over-estimates here."),
     "NXP_MPL115A1_LGA-8": (
         "the file has no pcurves (uncertainty 1e-7): the reader projects the edge circles of the "
         "four fillet corners (faces 5, 6, 9, 10, surfaces of revolution) onto wrong turns and "
@@ -182,7 +186,8 @@ TRIAGE = {
 CAUSES_1E4 = {
     "deviation": (
         "Crystal_C38-LF: the yardstick's over-estimate beside an elliptic hole (0.99x by "
-        "BRepExtrema_DistShapeShape); NXP_MPL115A1 before 7c8e9e2: the reader's pcurves of its "
+        "BRepExtrema_DistShapeShape; OCCT's Extrema_ExtPC finds no foot over the short range "
+        "of the ellipse that the yardstick asks); NXP_MPL115A1 before 7c8e9e2: the reader's pcurves of its "
         "four fillet corners span a turn and a quarter where their edges bound a quarter turn, "
         "which is meshed whole; the worst sample's foot is taken a turn away, outside those "
         "pcurves (clean since, 0.98x: no mesh point falls there)."),
