@@ -931,6 +931,46 @@ TopoDS_Shape ItemBuilder::CurveSet(const Entity& set) {
   return compound;
 }
 
+// ShapeBuild_ReShape whose Apply returns a shape none of whose sub-shapes (down to `until`) is
+// recorded as it is, with the status OK, as the base class does: the base copies every sub-shape
+// on its way down (edges with all their curve representations) only to find nothing changed,
+// which was most of ShapeFix_Face's time (ShapeFix_Wire applies the context to its wire and
+// edges dozens of times per face). Recorded shapes go the base class's way. In the mode that
+// considers locations (ShapeFix_Shape's) IsRecorded and the base's Value both look a shape up
+// without its location, and Value gives an unrecorded shape back with it: the same shortcut.
+class QuickReShape : public ShapeBuild_ReShape {
+ public:
+  TopoDS_Shape Apply(const TopoDS_Shape& shape,
+                     const TopAbs_ShapeEnum until = TopAbs_SHAPE) override {
+    if (shape.IsNull() || RecordedWithin(shape, until))
+      return ShapeBuild_ReShape::Apply(shape, until);
+    myStatus = ShapeExtend::EncodeStatus(ShapeExtend_OK);
+    return shape;
+  }
+
+ private:
+  // Whether `shape` or a sub-shape the base class's Apply would visit is recorded.
+  bool RecordedWithin(const TopoDS_Shape& shape, TopAbs_ShapeEnum until) const {
+    if (IsRecorded(shape)) return true;
+    const TopAbs_ShapeEnum type = shape.ShapeType();
+    if (type >= until || type == TopAbs_VERTEX || type == TopAbs_SHAPE) return false;
+    for (TopoDS_Iterator it(shape, Standard_False); it.More(); it.Next())
+      if (RecordedWithin(it.Value(), until)) return true;
+    return false;
+  }
+};
+
+// ShapeFix_Shape with the context its Init would make (one that considers locations), but a
+// QuickReShape: applied to a whole item, OCCT's copies all of it to give the same shape back (a
+// sixth of the shell stage on a 1,684-face part), and its wire fixing applies it to every edge.
+Handle(ShapeFix_Shape) NewShapeFix() {
+  Handle(ShapeFix_Shape) fix = new ShapeFix_Shape;
+  Handle(ShapeBuild_ReShape) context = new QuickReShape;
+  context->ModeConsiderLocation() = Standard_True;
+  fix->SetContext(context);
+  return fix;
+}
+
 // RecModif of ShapeProcess_ShapeContext: what each sub-shape (down to edges) became.
 void RecordModifications(const TopoDS_Shape& shape, const Handle(ShapeBuild_ReShape) & reshape,
                          TopTools_DataMapOfShapeShape* map) {
@@ -976,7 +1016,7 @@ void HealItem(BrepItem* item) {
   item->modified.Clear();
   try {
     OCC_CATCH_SIGNALS
-    Handle(ShapeFix_Shape) fix = new ShapeFix_Shape;
+    Handle(ShapeFix_Shape) fix = NewShapeFix();
     fix->Init(item->raw);
     fix->SetPrecision(item->units.precision);
     fix->SetMaxTolerance(item->units.max_tolerance);
@@ -1000,34 +1040,6 @@ TopoDS_Shape HealedShape(const BrepItem& item, const TopoDS_Shape& raw) {
 }
 
 namespace {
-
-// ShapeBuild_ReShape whose Apply returns a shape none of whose sub-shapes (down to `until`) is
-// recorded as it is, with the status OK, as the base class does: the base copies every sub-shape
-// on its way down (edges with all their curve representations) only to find nothing changed,
-// which was most of ShapeFix_Face's time (ShapeFix_Wire applies the context to its wire and
-// edges dozens of times per face). Recorded shapes, and contexts that consider locations, go
-// the base class's way.
-class QuickReShape : public ShapeBuild_ReShape {
- public:
-  TopoDS_Shape Apply(const TopoDS_Shape& shape,
-                     const TopAbs_ShapeEnum until = TopAbs_SHAPE) override {
-    if (shape.IsNull() || ModeConsiderLocation() || RecordedWithin(shape, until))
-      return ShapeBuild_ReShape::Apply(shape, until);
-    myStatus = ShapeExtend::EncodeStatus(ShapeExtend_OK);
-    return shape;
-  }
-
- private:
-  // Whether `shape` or a sub-shape the base class's Apply would visit is recorded.
-  bool RecordedWithin(const TopoDS_Shape& shape, TopAbs_ShapeEnum until) const {
-    if (IsRecorded(shape)) return true;
-    const TopAbs_ShapeEnum type = shape.ShapeType();
-    if (type >= until || type == TopAbs_VERTEX || type == TopAbs_SHAPE) return false;
-    for (TopoDS_Iterator it(shape, Standard_False); it.More(); it.Next())
-      if (RecordedWithin(it.Value(), until)) return true;
-    return false;
-  }
-};
 
 // A pcurve StorePlanePcurves stored, held (so that no other curve takes its address) with its
 // points at the ends of its range, to tell whether the fixing changed it in place.
@@ -1637,7 +1649,7 @@ void FinishItem(BrepItem* item, const TopoDS_Shape& merged,
                 const std::vector<FaceJob*>& jobs, const ParallelRunner& runner) {
   item->healed = merged;
   item->modified.Clear();
-  Handle(ShapeFix_Shape) fix = new ShapeFix_Shape;
+  Handle(ShapeFix_Shape) fix = NewShapeFix();
   fix->Init(merged);
   fix->SetPrecision(item->units.precision);
   fix->SetMaxTolerance(item->units.max_tolerance);
