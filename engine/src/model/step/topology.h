@@ -3,16 +3,13 @@
 // them (Builder, TranslateShell/Face/EdgeLoop/Edge/Vertex): one TopoDS vertex per VERTEX_POINT and
 // one edge per EDGE_CURVE within a representation item, the same vertex merging, the same edge
 // parameters (projections of the vertices on the curve), the file's pcurves where OCCT takes
-// them, the same wire and face orientations. Then each item is healed with the ShapeFix calls
-// and settings of OCCT's reader (XSAlgo_AlgoContainer::ProcessShape without a resource file).
-#include <Geom2d_Curve.hxx>
+// them, the same wire and face orientations. The healing that follows is model/step/heal_items.h.
 #include <TopTools_DataMapOfShapeShape.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
 #include <TopoDS_Wire.hxx>
 #include <cstdint>
-#include <functional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -68,45 +65,8 @@ bool CheckPCurve(const TopoDS_Edge& edge, const TopoDS_Face& face, double preci,
 /// OCCT's reader would drop a face, an edge or a wire, or builds something not reproduced here.
 void BuildItem(Geometry& geometry, BrepItem* item);
 
-/// Heals `item.raw` into `item.healed` as XSAlgo_AlgoContainer::ProcessShape does by default:
-/// ShapeFix_Shape with the item's precision and maximum tolerance, same-parameter fixing off in
-/// the wire tool, no open solids. Thread-safe for items that share no TShapes or Geom objects.
-void HealItem(BrepItem* item);
-
-/// Heals every item as HealItem does, the faces of all items in parallel: each face is fixed
-/// by ShapeFix_Face (as ShapeFix_Shell would) on private copies of its edges and vertices; where
-/// that changed nothing but pcurves, ranges, tolerances and flags, the copies are merged back
-/// into shared edges and the shell, solid, same-parameter and vertex tolerance stages of
-/// ShapeFix_Shape run on the result. An item whose faces' fixing changed more (an edge removed,
-/// split or added, a wire reordered or reversed) is healed by HealItem instead, as OCCT does.
-/// `stop` is polled between faces.
-struct HealStats {
-  int items_face_parallel = 0;  ///< items healed face by face (the others by HealItem)
-  std::string refused;          ///< why the first other item was not, e.g. "shared edge's curve"
-  double face_seconds = 0;      ///< the parallel face fixing
-  /// Items where a face's fixing cut a shared edge's range, whose faces then found their edges
-  /// and vertices as the faces before them left them, and how many faces that fixed again.
-  int items_in_order = 0;
-  int faces_fixed_again = 0;
-  double finish_seconds = 0;  ///< merging, the shell and solid stages, and HealItem fallbacks
-  /// Pcurves on planes the fixing stored and left on the healed items (OCCT projects them on
-  /// demand and stores none): RemovePcurves takes them off once the last stage that reads them
-  /// has run.
-  std::vector<Handle(Geom2d_Curve)> kept_pcurves;
-};
-HealStats HealItems(const std::vector<BrepItem*>& items, int threads,
-                    const std::function<bool()>& stop);
-
-/// Removes from every edge of `shape` the curve-on-surface representations whose pcurve is one
-/// of `pcurves`.
-void RemovePcurves(const TopoDS_Shape& shape, const std::vector<Handle(Geom2d_Curve)>& pcurves);
-
 /// Initialises, once per process, the OCCT globals BuildItem and HealItem use (the shape
 /// healing algorithm containers, lazily built planes), so HealItem may run in parallel.
 void PrepareOcct();
-
-/// The shape OCCT's reader binds to a face, shell or item after healing (MergeTransferInfo):
-/// what the healing replaced `raw` with, `raw` when untouched, null when removed.
-TopoDS_Shape HealedShape(const BrepItem& item, const TopoDS_Shape& raw);
 
 }  // namespace rdmesh::step

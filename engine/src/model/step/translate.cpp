@@ -43,6 +43,7 @@
 #include "model/step/entities.h"
 #include "model/step/finish.h"
 #include "model/step/geometry.h"
+#include "model/step/heal_items.h"
 #include "model/step/topology.h"
 #include "model/xcaf_api.h"
 
