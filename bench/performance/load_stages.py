@@ -5,7 +5,8 @@
 
 Per file, ROUNDS alternating runs of `taskset -c 0 rdmesh mesh FILE --threads 1` (one core) and
 `rdmesh mesh FILE --threads 2` (two), both `--max-deviation-rel 1e-3 --json`; the median of each
-stage's seconds (the report's load_stages, and load_seconds as "load") per file, summed over the
+stage's seconds (the report's load stages as parse_e2e.py flattens them, and load_seconds as
+"load") per file, summed over the
 files, and the ratio one core / two. Where a stage does not scale, it runs on one thread: that
 is the part the bar of 1.7x leaves no room for. Timings: run it on a quiet machine.
 """
@@ -19,6 +20,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import parse_e2e  # noqa: E402  (the report's stages, read as the end-to-end table reads them)
+
 REPO = pathlib.Path(__file__).resolve().parents[2]
 
 
@@ -30,7 +34,7 @@ def run(rdmesh, path, out, one_core):
     if proc.returncode != 0:
         sys.exit("%s failed on %s: %s" % (rdmesh, path, proc.stderr.strip()[-300:]))
     report = json.loads(proc.stdout.strip().splitlines()[-1])
-    stages = dict(report.get("load_stages") or {})
+    stages = parse_e2e.flat_stages(parse_e2e.load_stages(report))
     stages["load"] = report["load_seconds"]
     return stages
 
