@@ -81,13 +81,24 @@ def last_json(text):
     return None
 
 
+def engine_binary(binary):
+    """The program that does the work: rdmesh-local beside an rdmesh launcher, or the binary."""
+    local = os.path.join(os.path.dirname(binary), "rdmesh-local")
+    return local if os.path.basename(binary) == "rdmesh" and os.path.isfile(local) else binary
+
+
 def allocator(binary):
-    """The malloc a program is linked with: "tcmalloc" or glibc's (CMake's RDMESH_TCMALLOC)."""
+    """The malloc a program is linked with: "mimalloc", "tcmalloc" or glibc's (CMake's
+    RDMESH_MALLOC)."""
     try:
-        out = subprocess.run(["ldd", binary], capture_output=True, text=True).stdout
+        out = subprocess.run(["ldd", engine_binary(binary)], capture_output=True,
+                             text=True).stdout
     except OSError:
         return "?"
-    return "tcmalloc" if "libtcmalloc" in out else "glibc"
+    for name in ("mimalloc", "tcmalloc"):
+        if "lib" + name in out:
+            return name
+    return "glibc"
 
 
 def sha256(path):
@@ -98,11 +109,17 @@ def sha256(path):
     return h.hexdigest()[:16]
 
 
+# Every mesher's allocator (mimalloc, linked into rdmesh-local and brepmesh_runner alike) on
+# transparent huge pages, as rdmesh's launcher sets it for the program it runs; a value the caller
+# set stays.
+RUN_ENV = dict({"MIMALLOC_LARGE_OS_PAGES": "1"}, **os.environ)
+
+
 def run(cmd, timeout):
     """(stdout, stderr, returncode or 'timeout', wall seconds)."""
     t0 = time.perf_counter()
     try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=RUN_ENV)
         return p.stdout, p.stderr, p.returncode, time.perf_counter() - t0
     except subprocess.TimeoutExpired as e:
         out = e.stdout.decode() if isinstance(e.stdout, bytes) else (e.stdout or "")
@@ -689,9 +706,11 @@ def main():
                               capture_output=True, text=True).stdout.strip() or "7.6"
     except OSError:
         pass
-    tools = {"rdmesh": "rdmesh-" + sha256(a.rdmesh) if "rdmesh" in a.meshers else "",
+    runner_malloc = allocator(a.brepmesh_runner)
+    tools = {"rdmesh": "rdmesh-" + sha256(a.rdmesh) + "-" + sha256(engine_binary(a.rdmesh))
+             if "rdmesh" in a.meshers else "",
              "brepmesh": f"occt-{occt}-runner-{sha256(os.path.join(HERE, 'brepmesh_runner.cpp'))}"
-                         + ("-tcmalloc" if allocator(a.brepmesh_runner) == "tcmalloc" else ""),
+                         + ("" if runner_malloc == "glibc" else "-" + runner_malloc),
              "gmsh": f"gmsh-{gmsh_version}"}
 
     names = a.models or (QUICK if a.quick else DEFAULT)

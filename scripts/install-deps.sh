@@ -20,7 +20,7 @@ mode=${1:-build}
 runtime_pkgs=(
   libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev
   libocct-foundation-dev libocct-ocaf-dev libocct-visualization-dev
-  libgrpc++-dev libprotobuf-dev libspdlog-dev libtbb-dev libtcmalloc-minimal4
+  libgrpc++-dev libprotobuf-dev libspdlog-dev libtbb-dev libmimalloc-dev
   # meshoptimizer 0.18: the compressed .glb (rdmesh mesh --compress, engine/src/writers).
   libmeshoptimizer-dev
   python3-grpcio python3-protobuf python3-numpy python3-meshio python3-tqdm

@@ -124,7 +124,13 @@ def main():
     models = [pathlib.Path(m) for m in args.models] or corpus_models()
     tolerances = [float(t) for t in args.tolerances.split(",")]
     field = "mesh_cpu_seconds" if args.time == "cpu" else "seconds"
-    sha = hashlib.sha256(pathlib.Path(args.rdmesh).read_bytes()).hexdigest()[:16]
+    # The launcher and the program it runs (rdmesh-local beside it), so that the cache key moves
+    # with the engine.
+    digest = hashlib.sha256(pathlib.Path(args.rdmesh).read_bytes())
+    local = pathlib.Path(args.rdmesh).with_name("rdmesh-local")
+    if local.is_file():
+        digest.update(local.read_bytes())
+    sha = digest.hexdigest()[:16]
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
 

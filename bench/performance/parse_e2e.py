@@ -49,6 +49,10 @@ REL = 1e-3
 # the STEP reader); --rdmesh-env sets them explicitly.
 DROPPED_ENV = ("RDMESH_CACHE_DIR", "RDMESH_CACHE_DIR_BYTES", "RDMESH_NO_FORK", "RDMESH_THREADS",
                "RDMESH_STEP_READER")
+# Both sides' allocator (mimalloc, linked into rdmesh-local and the plain runner alike) on
+# transparent huge pages: rdmesh's launcher sets this for the program it runs, and the plain
+# runner, started directly, gets it here (docs/TUNING.md, "The allocator").
+SHARED_ENV = {"MIMALLOC_LARGE_OS_PAGES": "1"}
 SERIAL = True  # one process at a time (--jobs 1): the children's CPU time is the one run's
 TIMEOUT = 900.0  # seconds per process (--timeout)
 
@@ -101,8 +105,11 @@ def fetch_kicad(cache_dir):
 # -- measuring --------------------------------------------------------------------------------
 
 def child_env(extra=()):
-    """The environment of every run: ours without DROPPED_ENV, plus `extra` ("KEY=VALUE")."""
+    """The environment of every run: ours without DROPPED_ENV, with SHARED_ENV where ours does
+    not set it, plus `extra` ("KEY=VALUE")."""
     env = {k: v for k, v in os.environ.items() if k not in DROPPED_ENV}
+    for key, value in SHARED_ENV.items():
+        env.setdefault(key, value)
     for item in extra:
         key, _, value = item.partition("=")
         env[key] = value
@@ -456,7 +463,8 @@ def render(results):
     L.append("- environment of the runs: %s" % (
         ", ".join("`%s`" % e for e in meta["env"]) if meta.get("env") else
         "the caller's, without %s (so rdmesh reads with its default reader, keeps no model "
-        "store and forks its reader child)" % ", ".join(DROPPED_ENV)))
+        "store and runs in a child process), and with %s for both programs unless the caller "
+        "set it" % (", ".join(DROPPED_ENV), ", ".join("`%s=%s`" % kv for kv in SHARED_ENV.items()))))
     L.append("- files: %s" % meta["files_note"])
     L += ["", "## Summary", ""]
     L.append("Ratio = rdmesh's median wall time / the plain runner's, per file; the issue's goal "
@@ -695,10 +703,10 @@ def main(argv=None):
     for binary in [args.rdmesh, args.plain_runner] + ([args.rdmeshd] if args.service else []):
         if not os.access(binary, os.X_OK):
             raise SystemExit("no executable at %s" % binary)
-    # rdmesh loads OCCT's STEP reader (its fallback) and OCCT's document framework (assemblies)
-    # from modules beside it: a copied binary needs them copied too, or the files that need them
-    # fail instead of being timed.
-    for module in ("rdmesh_occt_readers.so", "rdmesh_occt_xcaf.so"):
+    # rdmesh runs rdmesh-local beside it, which loads OCCT's STEP reader (its fallback) and
+    # OCCT's document framework (assemblies) from modules beside it: a copied binary needs them
+    # copied too, or the files that need them fail instead of being timed.
+    for module in ("rdmesh-local", "rdmesh_occt_readers.so", "rdmesh_occt_xcaf.so"):
         module = os.path.join(os.path.dirname(args.rdmesh), module)
         if not os.path.isfile(module):
             print("parse_e2e: warning: no %s beside rdmesh: the files that need it will fail"

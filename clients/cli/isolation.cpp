@@ -1,17 +1,15 @@
 #include "isolation.h"
 
 #include <fcntl.h>
-#include <sys/wait.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
-#include <iterator>
 
 namespace rdmesh::cli {
 
@@ -21,38 +19,34 @@ namespace {
 int g_phase_fd = -1;
 std::atomic<Phase> g_phase{Phase::kLoading};
 
-// The child's pid in the parent while it runs, and how many signals were passed on to it.
-volatile sig_atomic_t g_child = 0;
-volatile sig_atomic_t g_forwarded = 0;
-
-constexpr int kForwarded[] = {SIGINT, SIGTERM, SIGHUP};
-
-void Forward(int signal) {
-  pid_t child = g_child;
-  if (child <= 0) return;
-  kill(child, g_forwarded == 0 ? signal : SIGKILL);
-  g_forwarded = g_forwarded + 1;
-}
-
 bool ForkDisabled() {
   const char* value = std::getenv("RDMESH_NO_FORK");
   return value != nullptr && value[0] != '\0' && std::strcmp(value, "0") != 0;
 }
 
-// Reads phase bytes until the child closes the pipe (it exits); returns the last one.
-Phase FollowPhases(int fd) {
-  Phase phase = Phase::kLoading;
-  char bytes[64];
-  for (;;) {
-    ssize_t count = read(fd, bytes, sizeof(bytes));
-    if (count > 0) {
-      phase = static_cast<Phase>(bytes[count - 1]);
-    } else if (count < 0 && errno == EINTR) {
-      continue;
-    } else {
-      return phase;
-    }
-  }
+// The phase pipe the launcher handed over (kPhaseFdVariable), or -1. The variable is removed
+// so that no process this one starts takes it for its own.
+int InheritedPhaseFd() {
+  const char* value = std::getenv(kPhaseFdVariable);
+  if (value == nullptr) return -1;
+  char* end = nullptr;
+  long fd = std::strtol(value, &end, 10);
+  unsetenv(kPhaseFdVariable);
+  struct stat info;
+  if (end == value || *end != '\0' || fd < 3 || fd > 1 << 20 || fstat(fd, &info) != 0 ||
+      !S_ISFIFO(info.st_mode))
+    return -1;
+  fcntl(static_cast<int>(fd), F_SETFD, FD_CLOEXEC);
+  return static_cast<int>(fd);
+}
+
+// Runs `run` with its phases going to `fd`, the write end of a pipe the parent reads.
+int RunReporting(const std::function<int()>& run, int fd) {
+  g_phase_fd = fd;
+  int code = run();
+  close(fd);
+  g_phase_fd = -1;
+  return code;
 }
 
 }  // namespace
@@ -69,14 +63,17 @@ Phase CurrentPhase() { return g_phase.load(); }
 
 int RunIsolated(const std::function<int()>& run,
                 const std::function<int(const ChildDeath&)>& on_death) {
+  if (const char* text = std::getenv(kDeathVariable)) {
+    ChildDeath death;
+    const bool known = ParseDeath(text, &death);
+    unsetenv(kDeathVariable);
+    if (known) return on_death(death);
+  }
+  if (int fd = InheritedPhaseFd(); fd >= 0) return RunReporting(run, fd);
   if (ForkDisabled()) return run();
   int pipe_fds[2];
   if (pipe2(pipe_fds, O_CLOEXEC) != 0) return run();
-  // Signals wait until the parent's forwarding handlers are in place; nothing is buffered twice.
-  sigset_t forwarded, saved_mask;
-  sigemptyset(&forwarded);
-  for (int signal : kForwarded) sigaddset(&forwarded, signal);
-  sigprocmask(SIG_BLOCK, &forwarded, &saved_mask);
+  const sigset_t saved_mask = BlockForwardedSignals();
   std::cout.flush();
   std::cerr.flush();
   std::fflush(nullptr);
@@ -88,31 +85,13 @@ int RunIsolated(const std::function<int()>& run,
       close(pipe_fds[1]);
       return run();
     }
-    g_phase_fd = pipe_fds[1];
-    int code = run();
-    close(pipe_fds[1]);
-    g_phase_fd = -1;
-    return code;
+    return RunReporting(run, pipe_fds[1]);
   }
 
   close(pipe_fds[1]);
-  g_child = child;
-  struct sigaction forward = {}, saved[std::size(kForwarded)];
-  forward.sa_handler = Forward;
-  sigemptyset(&forward.sa_mask);
-  for (size_t i = 0; i < std::size(kForwarded); ++i) sigaction(kForwarded[i], &forward, &saved[i]);
-  sigprocmask(SIG_SETMASK, &saved_mask, nullptr);
-
-  ChildDeath death{FollowPhases(pipe_fds[0]), 0, false};
-  close(pipe_fds[0]);
-  int status = 0;
-  while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
-  }
-  g_child = 0;
-  for (size_t i = 0; i < std::size(kForwarded); ++i) sigaction(kForwarded[i], &saved[i], nullptr);
-  if (WIFEXITED(status)) return WEXITSTATUS(status);
-  death.signal = WTERMSIG(status);
-  death.interrupted = g_forwarded > 0;
+  int code = 0;
+  ChildDeath death;
+  if (Supervise(child, pipe_fds[0], saved_mask, &code, &death)) return code;
   return on_death(death);
 }
 

@@ -1,10 +1,12 @@
 """The CLI runs each command in a child process (clients/cli/isolation.h): when the child dies by
 a signal, the parent exits with the documented code and message. A FIFO as the model keeps the
-child in the loading phase until the test has signalled it."""
+child in the loading phase until the test has signalled it. `rdmesh` is a launcher that starts
+rdmesh-local as that child; rdmesh-local run by hand forks a child of its own."""
 
 import json
 import os
 import pathlib
+import shutil
 import signal
 import subprocess
 import time
@@ -46,13 +48,13 @@ def waits_in_open(pid):
 @pytest.fixture
 def stuck_run(cli, tmp_path):
     """Starts `rdmesh ARGS` on a FIFO model (the run waits in loading); yields a function
-    start(*args, env=None) -> (process, child pid)."""
+    start(*args, env=None, program=cli) -> (process, child pid)."""
     fifo = tmp_path / "model.step"
     os.mkfifo(fifo)
     started = []
 
-    def start(*args, env=None):
-        process = subprocess.Popen([str(cli), *args[:1], str(fifo), *args[1:]],
+    def start(*args, env=None, program=cli):
+        process = subprocess.Popen([str(program), *args[:1], str(fifo), *args[1:]],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                    env=dict(os.environ, **(env or {})))
         started.append(process)
@@ -81,9 +83,10 @@ def finish(process):
     return process.returncode, json.loads(lines[-1]) if lines else None, stderr
 
 
+@pytest.mark.parametrize("program", ["rdmesh", "rdmesh-local"])
 @pytest.mark.parametrize("command", [["info"], ["mesh", "-o", "out.msh"]])
-def test_reader_crash_exits_3(stuck_run, command):
-    process, child = stuck_run(*command, "--json")
+def test_reader_crash_exits_3(cli, stuck_run, command, program):
+    process, child = stuck_run(*command, "--json", program=cli.parent / program)
     os.kill(child, signal.SIGSEGV)
     code, error, stderr = finish(process)
     message = "cannot read '%s': the STEP reader crashed (SIGSEGV) on this model"
@@ -137,3 +140,32 @@ def test_no_fork_runs_in_one_process(cli, tmp_path):
         process.kill()
         process.wait()
     assert process.returncode == -signal.SIGKILL
+
+
+def test_the_launcher_loads_only_the_c_library(cli):
+    # Its start-up is paid on every run: no C++ library, no allocator, no OCCT.
+    dynamic = subprocess.run(["readelf", "-d", str(cli)], capture_output=True, text=True,
+                             check=True).stdout
+    needed = [line.split("[")[1].rstrip("]") for line in dynamic.splitlines()
+              if "(NEEDED)" in line]
+    assert needed == ["libc.so.6"]
+
+
+def test_the_launcher_runs_the_child_and_passes_its_exit_code(cli, data_dir, tmp_path):
+    # A bad option: rdmesh-local's own usage error and code come back through the launcher.
+    run = subprocess.run([str(cli), "mesh", str(tmp_path / "none.step"), "-o", "x.msh",
+                          "--no-such-flag"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "--no-such-flag" in run.stderr
+    run = subprocess.run([str(cli), "info", str(tmp_path / "none.step"), "--json"],
+                         capture_output=True, text=True)
+    assert run.returncode == 3 and json.loads(run.stdout)["error"]["code"] == "not_found"
+
+
+def test_a_launcher_without_rdmesh_local_says_so(cli, tmp_path):
+    alone = tmp_path / "rdmesh"
+    shutil.copy2(cli, alone)
+    for command in (["info", "x.step"], ["--help"]):
+        run = subprocess.run([str(alone), *command], capture_output=True, text=True)
+        assert run.returncode == 2
+        assert str(tmp_path / "rdmesh-local") in run.stderr
