@@ -19,11 +19,6 @@ namespace {
 int g_phase_fd = -1;
 std::atomic<Phase> g_phase{Phase::kLoading};
 
-bool ForkDisabled() {
-  const char* value = std::getenv("RDMESH_NO_FORK");
-  return value != nullptr && value[0] != '\0' && std::strcmp(value, "0") != 0;
-}
-
 // The phase pipe the launcher handed over (kPhaseFdVariable), or -1. The variable is removed
 // so that no process this one starts takes it for its own.
 int InheritedPhaseFd() {

@@ -49,11 +49,6 @@ int ExecBeside(const char* name, char** argv, const char* why) {
   return rdmesh::cli::kExitUsage;
 }
 
-bool ForkDisabled() {
-  const char* value = getenv("RDMESH_NO_FORK");
-  return value != nullptr && value[0] != '\0' && strcmp(value, "0") != 0;
-}
-
 bool IsRemote(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
     if (strcmp(argv[i], "--remote") == 0 || strncmp(argv[i], "--remote=", 9) == 0) return true;
@@ -69,8 +64,8 @@ int main(int argc, char** argv) {
   setenv("MIMALLOC_LARGE_OS_PAGES", "1", 0);
   // rdmesh-remote links the gRPC client: a local run does not load it.
   if (IsRemote(argc, argv)) return ExecBeside("rdmesh-remote", argv, "--remote");
-  const bool isolated =
-      argc > 1 && !ForkDisabled() && (strcmp(argv[1], "mesh") == 0 || strcmp(argv[1], "info") == 0);
+  const bool isolated = argc > 1 && !rdmesh::cli::ForkDisabled() &&
+                        (strcmp(argv[1], "mesh") == 0 || strcmp(argv[1], "info") == 0);
   int pipe_fds[2];
   // Without a pipe the run goes on in this process, as RunIsolated does when it cannot fork.
   if (!isolated || pipe2(pipe_fds, O_CLOEXEC) != 0)

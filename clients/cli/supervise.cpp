@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -41,6 +42,11 @@ Phase FollowPhases(int fd) {
 }
 
 }  // namespace
+
+bool ForkDisabled() {
+  const char* value = getenv("RDMESH_NO_FORK");
+  return value != nullptr && value[0] != '\0' && strcmp(value, "0") != 0;
+}
 
 sigset_t BlockForwardedSignals() {
   sigset_t forwarded, saved;

@@ -30,6 +30,9 @@ inline constexpr char kPhaseFdVariable[] = "RDMESH_PHASE_FD";
 /// and this variable ("PHASE:SIGNAL:INTERRUPTED", FormatDeath) to print the message and exit.
 inline constexpr char kDeathVariable[] = "RDMESH_CHILD_DEATH";
 
+/// RDMESH_NO_FORK is set to anything but "" or "0": the run stays in one process.
+bool ForkDisabled();
+
 /// Blocks SIGINT, SIGTERM and SIGHUP until Supervise has its handlers in place, so that a
 /// signal that comes during the start of the child is passed on, not lost; returns the old mask.
 sigset_t BlockForwardedSignals();
